@@ -1,0 +1,190 @@
+//! One full evaluation: partition, then mass, centroid, area and gradient of
+//! every cell, and H(P) = Σ_i M_i (SPEC §2 "Cell figures").
+//!
+//! Definitions for the edge cases (all documented results, never NaN):
+//! - empty cell (vessel outside Q with no share of it, or dominated by other
+//!   vessels, including the later of two coincident vessels): mass 0, area 0,
+//!   gradient 0, centroid = the point of Q nearest the vessel (the vessel's own
+//!   position when it is inside Q), so guidance brings an outsider back;
+//! - Φ ≡ 0 (φ0 = 0 and no objects): every mass is 0 and each centroid is the
+//!   f_i-weighted centroid of the cell, the limit of φ0 → 0⁺;
+//! - a cell far from its vessel keeps its centroid even when its mass
+//!   underflows to 0 (see [`integrate`](super::integrate) on scaling).
+
+use geo::TriangulateEarcut;
+
+use super::density::RiskField;
+use super::fleet::Fleet;
+use super::integrate::{Gaussian, Tolerance, integrate};
+use super::partition::{CellGeometry, power_cells};
+use crate::geometry::{Point, Region};
+
+/// Evaluation settings.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Options {
+    pub tolerance: Tolerance,
+}
+
+/// Figures of one vessel's cell.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CellResult {
+    /// M_i = ∫_{V_i} f_i Φ.
+    pub mass: f64,
+    /// C_i.
+    pub centroid: Point,
+    /// Area of V_i.
+    pub area: f64,
+    /// ∂H/∂p_i = 2 β M_i (C_i − p_i).
+    pub gradient: Point,
+    /// V_i itself.
+    pub geometry: CellGeometry,
+}
+
+/// The whole evaluation, cells in the fleet's order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Evaluation {
+    /// H(P) = Σ_i M_i.
+    pub h: f64,
+    pub cells: Vec<CellResult>,
+}
+
+/// Evaluates the coverage of `fleet` over `region` under `risk`.
+pub fn evaluate(region: &Region, risk: &RiskField, fleet: &Fleet, options: &Options) -> Evaluation {
+    let geometries = power_cells(region, fleet);
+    let mut near = Vec::new();
+    let cells: Vec<CellResult> = geometries
+        .into_iter()
+        .zip(fleet.vessels())
+        .map(|(geometry, vessel)| {
+            cell_figures(
+                region,
+                risk,
+                vessel,
+                fleet.beta(),
+                geometry,
+                options,
+                &mut near,
+            )
+        })
+        .collect();
+    let h = cells.iter().map(|c| c.mass).sum();
+    Evaluation { h, cells }
+}
+
+fn cell_figures(
+    region: &Region,
+    risk: &RiskField,
+    vessel: &super::Vessel,
+    beta: f64,
+    geometry: CellGeometry,
+    options: &Options,
+    near: &mut Vec<usize>,
+) -> CellResult {
+    let p = vessel.position;
+    let zero = Point { x: 0.0, y: 0.0 };
+    let triangles = local_triangles(&geometry, p);
+    if triangles.is_empty() {
+        return CellResult {
+            mass: 0.0,
+            centroid: region.closest_point(p),
+            area: 0.0,
+            gradient: zero,
+            geometry: CellGeometry::Empty,
+        };
+    }
+    let area = geometry.area();
+    let (min, max) = bounds(&triangles, p);
+
+    let ln_k = vessel.k.ln();
+    let mut terms = Vec::new();
+    if risk.base() > 0.0 {
+        terms.push(Gaussian {
+            log_weight: ln_k + risk.base().ln(),
+            a: beta,
+            center: zero,
+        });
+    }
+    let tol = options.tolerance;
+    risk.objects_near(min, max, 1e-3 * tol.relative, near);
+    for &j in near.iter() {
+        let o = risk.objects()[j];
+        let b = 1.0 / (2.0 * o.sigma * o.sigma);
+        let s = o.center - p;
+        let a = beta + b;
+        terms.push(Gaussian {
+            log_weight: ln_k + o.alpha.ln() - beta * b / a * (s.x * s.x + s.y * s.y),
+            a,
+            center: s * (b / a),
+        });
+    }
+    let weightless = terms.is_empty();
+    if weightless {
+        // Φ ≡ 0: the centroid is the limit of φ0 → 0⁺, the mass is 0.
+        terms.push(Gaussian {
+            log_weight: 0.0,
+            a: beta,
+            center: zero,
+        });
+    }
+    let r = integrate(&triangles, &terms, tol);
+    if !(r.mass > 0.0 && r.mass.is_finite()) {
+        return CellResult {
+            mass: 0.0,
+            centroid: region.closest_point(p),
+            area,
+            gradient: zero,
+            geometry,
+        };
+    }
+    let scale = if weightless { 0.0 } else { r.log_scale.exp() };
+    let mass = r.mass * scale;
+    let offset = r.moment / r.mass;
+    CellResult {
+        mass,
+        centroid: p + offset,
+        area,
+        gradient: r.moment * (2.0 * beta * scale),
+        geometry,
+    }
+}
+
+/// Triangles of the cell in coordinates relative to `p`.
+fn local_triangles(geometry: &CellGeometry, p: Point) -> Vec<[Point; 3]> {
+    match geometry {
+        CellGeometry::Empty => Vec::new(),
+        CellGeometry::Convex(c) => {
+            let v = &c.vertices;
+            (1..v.len().saturating_sub(1))
+                .map(|i| [v[0] - p, v[i] - p, v[i + 1] - p])
+                .collect()
+        }
+        CellGeometry::General(mp) => {
+            mp.0.iter()
+                .flat_map(|poly| poly.earcut_triangles_iter())
+                .map(|t| {
+                    let [a, b, c] = t.to_array();
+                    [a - p, b - p, c - p]
+                })
+                .collect()
+        }
+    }
+}
+
+/// World-coordinate bounds of local triangles.
+fn bounds(triangles: &[[Point; 3]], p: Point) -> (Point, Point) {
+    let mut min = Point {
+        x: f64::INFINITY,
+        y: f64::INFINITY,
+    };
+    let mut max = Point {
+        x: f64::NEG_INFINITY,
+        y: f64::NEG_INFINITY,
+    };
+    for v in triangles.iter().flatten() {
+        min.x = min.x.min(v.x);
+        min.y = min.y.min(v.y);
+        max.x = max.x.max(v.x);
+        max.y = max.y.max(v.y);
+    }
+    (min + p, max + p)
+}

@@ -1,0 +1,111 @@
+//! Vessels and their actuator performance f_i(q) = k_i exp(−β_i ‖q − p_i‖²)
+//! (SPEC §2, eq. 4).
+//!
+//! Invariant of a [`Fleet`]: at least one vessel, every k_i, β_i positive and
+//! finite, positions within range, and one common β. With a common β the
+//! partition f_i ≥ f_j is a power diagram with straight edges; different β
+//! would give curved (Apollonius-like) edges, which the engine does not handle,
+//! so they are rejected as unsupported rather than approximated.
+
+use super::{InputError, check_range};
+use crate::geometry::Point;
+use crate::geometry::region::MAX_COORDINATE;
+
+/// Most vessels accepted.
+pub const MAX_VESSELS: usize = 10_000;
+/// Largest k accepted.
+pub const MAX_K: f64 = 1.0e12;
+/// Largest β accepted (1/√β ≥ 1 mm).
+pub const MAX_BETA: f64 = 1.0e6;
+
+/// The paper's actuator gain k.
+pub const DEFAULT_K: f64 = 0.5;
+/// The paper's actuator decay β (1/m²).
+pub const DEFAULT_BETA: f64 = 0.001;
+
+/// One vessel as the engine sees it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Vessel {
+    pub position: Point,
+    pub k: f64,
+    pub beta: f64,
+}
+
+impl Vessel {
+    /// f_i(q).
+    pub fn performance(&self, q: Point) -> f64 {
+        self.k * (-self.beta * crate::geometry::norm2(q - self.position)).exp()
+    }
+}
+
+/// A validated, non-empty fleet with a common β.
+#[derive(Debug, Clone)]
+pub struct Fleet {
+    vessels: Vec<Vessel>,
+    beta: f64,
+}
+
+impl Fleet {
+    pub fn new(vessels: Vec<Vessel>) -> Result<Self, InputError> {
+        if vessels.is_empty() {
+            return Err(InputError::invalid(
+                "vessels",
+                "at least one vessel is required",
+            ));
+        }
+        if vessels.len() > MAX_VESSELS {
+            return Err(InputError::invalid(
+                "vessels",
+                format!("at most {MAX_VESSELS} vessels"),
+            ));
+        }
+        for (i, v) in vessels.iter().enumerate() {
+            let f = |name: &str| format!("vessels[{i}].{name}");
+            check_range(
+                || f("x"),
+                v.position.x,
+                -MAX_COORDINATE,
+                true,
+                MAX_COORDINATE,
+            )?;
+            check_range(
+                || f("y"),
+                v.position.y,
+                -MAX_COORDINATE,
+                true,
+                MAX_COORDINATE,
+            )?;
+            check_range(|| f("k"), v.k, 0.0, false, MAX_K)?;
+            check_range(|| f("beta"), v.beta, 0.0, false, MAX_BETA)?;
+        }
+        let beta = vessels[0].beta;
+        if let Some(i) = vessels.iter().position(|v| v.beta != beta) {
+            return Err(InputError::Unsupported {
+                field: format!("vessels[{i}].beta"),
+                reason: format!(
+                    "all vessels must share one beta (vessels[0] has {beta}, this one {}): \
+                     different beta give curved cell edges, which are not supported",
+                    vessels[i].beta
+                ),
+            });
+        }
+        Ok(Fleet { vessels, beta })
+    }
+
+    pub fn vessels(&self) -> &[Vessel] {
+        &self.vessels
+    }
+
+    pub fn len(&self) -> usize {
+        self.vessels.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.vessels.is_empty()
+    }
+
+    /// The common β.
+    pub fn beta(&self) -> f64 {
+        self.beta
+    }
+}

@@ -1,0 +1,274 @@
+//! The generalized Voronoi partition V_i = { q ∈ Q : f_i(q) ≥ f_j(q) ∀ j }
+//! (SPEC §2, eq. 6) as power cells clipped to the region.
+//!
+//! With one β, f_i ≥ f_j ⟺ ‖q − p_i‖² − ln k_i / β ≤ ‖q − p_j‖² − ln k_j / β, a
+//! power diagram. In coordinates x = q − p_i and with d = p_j − p_i the
+//! condition is the half-plane
+//!
+//! ```text
+//! d · x ≤ ‖d‖² / 2 − (ln k_j − ln k_i) / (2β)
+//! ```
+//!
+//! Each cell starts as Q's bounding box and is clipped by the half-planes of
+//! the other vessels in order of distance (nearest-neighbour iteration in an
+//! R-tree). A vessel j at distance ‖d‖ can only cut a cell whose farthest
+//! vertex is at R if its line lies closer than R, i.e. if
+//! ‖d‖/2 − (ln k_j − ln k_i)/(2β‖d‖) < R. With W_i = (ln k_max − ln k_i)/(2β)
+//! no vessel with ‖d‖ ≥ R + √(R² + 2 W_i) can, and neither can any farther
+//! one, so the iteration stops there (the "security radius" of meshless
+//! Voronoi methods, extended to power weights). For well-spread fleets a cell
+//! looks at O(1) neighbours, and the whole partition costs O(n log n).
+//!
+//! The convex cell is then intersected with Q: by half-planes when Q is
+//! convex; otherwise it is kept whole when no boundary segment of Q meets it
+//! and its interior point is in Q, dropped when none meets it and the point is
+//! outside, and only the remaining boundary cells go through `geo`'s boolean
+//! intersection (which handles non-convex shells and holes exactly; `geo`'s
+//! own Voronoi clipping is not used because it lets cells overlap holes).
+//!
+//! Ties: vessels at the same position with the same k would own the same
+//! cell; the first in input order keeps it and the others get an empty cell.
+
+use geo::{Area, BooleanOps, LineString, MultiPolygon, Polygon};
+use rstar::RTree;
+use rstar::primitives::GeomWithData;
+
+use super::fleet::Fleet;
+#[cfg(test)]
+use crate::geometry::cross;
+use crate::geometry::{ConvexPolygon, Point, Region, norm2};
+
+/// The region a vessel is responsible for.
+#[derive(Debug, Clone, PartialEq)]
+pub enum CellGeometry {
+    /// Outside Q, or dominated by other vessels.
+    Empty,
+    /// A convex cell, in world coordinates.
+    Convex(ConvexPolygon),
+    /// A cell cut by Q's boundary: one or more pieces, possibly with holes.
+    General(MultiPolygon<f64>),
+}
+
+impl CellGeometry {
+    pub fn is_empty(&self) -> bool {
+        matches!(self, CellGeometry::Empty)
+    }
+
+    /// Area of the cell.
+    pub fn area(&self) -> f64 {
+        match self {
+            CellGeometry::Empty => 0.0,
+            CellGeometry::Convex(c) => c.area(),
+            CellGeometry::General(mp) => mp.unsigned_area(),
+        }
+    }
+}
+
+/// Computes every vessel's cell, in the fleet's order.
+pub fn power_cells(region: &Region, fleet: &Fleet) -> Vec<CellGeometry> {
+    let vessels = fleet.vessels();
+    let tree = RTree::bulk_load(
+        vessels
+            .iter()
+            .enumerate()
+            .map(|(i, v)| GeomWithData::new([v.position.x, v.position.y], i))
+            .collect(),
+    );
+    let beta = fleet.beta();
+    let ln_k: Vec<f64> = vessels.iter().map(|v| v.k.ln()).collect();
+    let ln_k_max = ln_k.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let (rmin, rmax) = region.bounds();
+    // A margin so that Q's boundary never coincides with the starting box.
+    let margin = 1e-3 * (rmax.x - rmin.x).max(rmax.y - rmin.y) + 1.0;
+    let lo = Point {
+        x: rmin.x - margin,
+        y: rmin.y - margin,
+    };
+    let hi = Point {
+        x: rmax.x + margin,
+        y: rmax.y + margin,
+    };
+
+    (0..vessels.len())
+        .map(|i| {
+            let p = vessels[i].position;
+            let mut cell = ConvexPolygon::rectangle(lo - p, hi - p);
+            let w_i = (ln_k_max - ln_k[i]) / (2.0 * beta);
+            for nb in tree.nearest_neighbor_iter(&[p.x, p.y]) {
+                let j = nb.data;
+                if j == i {
+                    continue;
+                }
+                let d = vessels[j].position - p;
+                let d2 = norm2(d);
+                let r2 = cell.max_distance2(Point { x: 0.0, y: 0.0 });
+                let r = r2.sqrt();
+                if d2.sqrt() >= r + (r2 + 2.0 * w_i).sqrt() {
+                    break;
+                }
+                if d2 == 0.0 {
+                    if ln_k[j] > ln_k[i] || (ln_k[j] == ln_k[i] && j < i) {
+                        cell.vertices.clear();
+                        break;
+                    }
+                    continue;
+                }
+                cell.clip(d, 0.5 * d2 - (ln_k[j] - ln_k[i]) / (2.0 * beta));
+                if cell.is_empty() {
+                    break;
+                }
+            }
+            if cell.is_empty() {
+                return CellGeometry::Empty;
+            }
+            cell.translate(p);
+            clip_to_region(cell, region)
+        })
+        .collect()
+}
+
+/// Intersects a convex cell (world coordinates) with Q.
+fn clip_to_region(mut cell: ConvexPolygon, region: &Region) -> CellGeometry {
+    if region.is_convex() {
+        let shell = region.shell();
+        let n = shell.len();
+        for k in 0..n {
+            let (a, b) = (shell[k], shell[(k + 1) % n]);
+            let e = b - a;
+            // Inside is to the left of a→b: cross(e, x − a) ≥ 0.
+            let normal = Point { x: e.y, y: -e.x };
+            cell.clip(normal, normal.x * a.x + normal.y * a.y);
+            if cell.is_empty() {
+                return CellGeometry::Empty;
+            }
+        }
+        return CellGeometry::Convex(cell);
+    }
+    let (min, max) = cell.bounds();
+    let touches = region
+        .segments_in(min, max)
+        .any(|(a, b)| cell.intersects_segment(a, b));
+    if !touches {
+        return if region.contains(cell.interior_point()) {
+            CellGeometry::Convex(cell)
+        } else {
+            CellGeometry::Empty
+        };
+    }
+    let mut ring = cell.vertices.clone();
+    ring.push(ring[0]);
+    let poly = Polygon::new(LineString::from(ring), vec![]);
+    let pieces: Vec<Polygon<f64>> = poly
+        .intersection(region.polygon())
+        .into_iter()
+        .filter(|piece| piece.unsigned_area() > 0.0)
+        .collect();
+    if pieces.is_empty() {
+        CellGeometry::Empty
+    } else {
+        CellGeometry::General(MultiPolygon(pieces))
+    }
+}
+
+/// Whether a convex polygon is counter-clockwise and convex (for tests).
+#[cfg(test)]
+pub(crate) fn is_ccw_convex(c: &ConvexPolygon) -> bool {
+    let n = c.vertices.len();
+    (0..n).all(|i| {
+        let (a, b, d) = (
+            c.vertices[i],
+            c.vertices[(i + 1) % n],
+            c.vertices[(i + 2) % n],
+        );
+        cross(b - a, d - b) >= -1e-9 * norm2(b - a).max(norm2(d - b))
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::coverage::fleet::Vessel;
+
+    fn v(x: f64, y: f64) -> Vessel {
+        Vessel {
+            position: Point { x, y },
+            k: 0.5,
+            beta: 0.001,
+        }
+    }
+
+    fn square(s: f64) -> Region {
+        Region::new(
+            vec![
+                Point { x: 0.0, y: 0.0 },
+                Point { x: s, y: 0.0 },
+                Point { x: s, y: s },
+                Point { x: 0.0, y: s },
+            ],
+            vec![],
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn two_vessels_split_a_square_in_half() {
+        let fleet = Fleet::new(vec![v(25.0, 50.0), v(75.0, 50.0)]).unwrap();
+        let cells = power_cells(&square(100.0), &fleet);
+        for c in &cells {
+            assert!((c.area() - 5000.0).abs() < 1e-9);
+            if let CellGeometry::Convex(p) = c {
+                assert!(is_ccw_convex(p));
+            } else {
+                panic!("expected convex cells");
+            }
+        }
+    }
+
+    #[test]
+    fn stronger_actuator_gets_the_bigger_cell() {
+        let mut strong = v(25.0, 50.0);
+        strong.k = 1.0;
+        let fleet = Fleet::new(vec![strong, v(75.0, 50.0)]).unwrap();
+        let cells = power_cells(&square(100.0), &fleet);
+        // Boundary x with d·x = |d|²/2 − ln(k_j/k_i)/(2β), measured from p_0.
+        let shift = (0.5f64 / 1.0).ln() / (2.0 * 0.001) / 50.0;
+        let x_edge = 25.0 + 25.0 - shift;
+        assert!((cells[0].area() - 100.0 * x_edge).abs() < 1e-8);
+    }
+
+    #[test]
+    fn coincident_vessels_first_wins() {
+        let fleet = Fleet::new(vec![v(30.0, 30.0), v(30.0, 30.0), v(70.0, 70.0)]).unwrap();
+        let cells = power_cells(&square(100.0), &fleet);
+        assert!(!cells[0].is_empty());
+        assert!(cells[1].is_empty());
+        assert!((cells[0].area() + cells[2].area() - 1e4).abs() < 1e-8);
+    }
+
+    #[test]
+    fn vessel_far_outside_gets_nothing() {
+        let fleet = Fleet::new(vec![v(50.0, 50.0), v(500.0, 50.0)]).unwrap();
+        let cells = power_cells(&square(100.0), &fleet);
+        assert!(cells[1].is_empty());
+        assert!((cells[0].area() - 1e4).abs() < 1e-8);
+    }
+
+    #[test]
+    fn hole_is_cut_out() {
+        let region = Region::new(
+            square(100.0).shell().to_vec(),
+            vec![vec![
+                Point { x: 40.0, y: 40.0 },
+                Point { x: 60.0, y: 40.0 },
+                Point { x: 60.0, y: 60.0 },
+                Point { x: 40.0, y: 60.0 },
+            ]],
+        )
+        .unwrap();
+        let fleet = Fleet::new(vec![v(50.0, 20.0), v(50.0, 80.0)]).unwrap();
+        let cells = power_cells(&region, &fleet);
+        let total: f64 = cells.iter().map(CellGeometry::area).sum();
+        assert!((total - region.area()).abs() < 1e-9 * region.area());
+        assert!((cells[0].area() - (5000.0 - 200.0)).abs() < 1e-8);
+    }
+}

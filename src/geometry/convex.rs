@@ -1,0 +1,222 @@
+//! Convex polygons and half-plane clipping (Sutherland–Hodgman for one plane).
+//!
+//! Power cells are intersections of half-planes, hence convex; clipping one
+//! convex polygon by a half-plane is exact up to rounding and O(vertices), which
+//! is why cells are built here rather than with general boolean operations.
+//! Vertices are counter-clockwise; an empty vertex list is the empty polygon.
+
+use super::{Point, cross, dot, ring_signed_area};
+
+/// A convex polygon, counter-clockwise, without the closing vertex.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ConvexPolygon {
+    pub vertices: Vec<Point>,
+}
+
+impl ConvexPolygon {
+    /// The axis-aligned rectangle [min, max].
+    pub fn rectangle(min: Point, max: Point) -> Self {
+        ConvexPolygon {
+            vertices: vec![
+                min,
+                Point { x: max.x, y: min.y },
+                max,
+                Point { x: min.x, y: max.y },
+            ],
+        }
+    }
+
+    /// Whether the polygon has no interior.
+    pub fn is_empty(&self) -> bool {
+        self.vertices.len() < 3
+    }
+
+    /// Keeps the part where `normal · x ≤ offset`.
+    ///
+    /// Vertices within a relative `1e-12` of the line count as on it, so a plane
+    /// through an existing vertex does not create a sliver vertex next to it.
+    pub fn clip(&mut self, normal: Point, offset: f64) {
+        if self.vertices.is_empty() {
+            return;
+        }
+        let scale = self
+            .vertices
+            .iter()
+            .map(|v| dot(normal, *v).abs())
+            .fold(offset.abs(), f64::max);
+        let eps = 1e-12 * scale.max(f64::MIN_POSITIVE);
+        let side: Vec<f64> = self
+            .vertices
+            .iter()
+            .map(|v| dot(normal, *v) - offset)
+            .collect();
+        if side.iter().all(|s| *s <= eps) {
+            return;
+        }
+        if side.iter().all(|s| *s >= -eps) {
+            self.vertices.clear();
+            return;
+        }
+        let n = self.vertices.len();
+        let mut out = Vec::with_capacity(n + 1);
+        for i in 0..n {
+            let j = (i + 1) % n;
+            let (a, b) = (self.vertices[i], self.vertices[j]);
+            let (sa, sb) = (side[i], side[j]);
+            if sa <= eps {
+                out.push(a);
+            }
+            if (sa < -eps && sb > eps) || (sa > eps && sb < -eps) {
+                let t = sa / (sa - sb);
+                out.push(a + (b - a) * t);
+            }
+        }
+        self.vertices = out;
+        if ring_signed_area(&self.vertices) <= 0.0 {
+            self.vertices.clear();
+        }
+    }
+
+    /// Area (non-negative).
+    pub fn area(&self) -> f64 {
+        ring_signed_area(&self.vertices).max(0.0)
+    }
+
+    /// Largest squared distance from `p` to a vertex.
+    pub fn max_distance2(&self, p: Point) -> f64 {
+        self.vertices
+            .iter()
+            .map(|v| super::norm2(*v - p))
+            .fold(0.0, f64::max)
+    }
+
+    /// Whether `p` is inside or on the boundary.
+    pub fn contains(&self, p: Point) -> bool {
+        if self.is_empty() {
+            return false;
+        }
+        let n = self.vertices.len();
+        (0..n).all(|i| {
+            let a = self.vertices[i];
+            let b = self.vertices[(i + 1) % n];
+            cross(b - a, p - a) >= 0.0
+        })
+    }
+
+    /// Whether the closed segment `a`–`b` meets the polygon (inside or boundary).
+    pub fn intersects_segment(&self, a: Point, b: Point) -> bool {
+        if self.is_empty() {
+            return false;
+        }
+        // Cyrus–Beck: clip the parameter interval [0, 1] by every edge.
+        let (mut t0, mut t1) = (0.0f64, 1.0f64);
+        let d = b - a;
+        let n = self.vertices.len();
+        for i in 0..n {
+            let p = self.vertices[i];
+            let q = self.vertices[(i + 1) % n];
+            let e = q - p;
+            // Inside is cross(e, x − p) ≥ 0, i.e. num + t den ≥ 0.
+            let num = cross(e, a - p);
+            let den = cross(e, d);
+            if den == 0.0 {
+                if num < 0.0 {
+                    return false;
+                }
+            } else {
+                let t = -num / den;
+                if den > 0.0 {
+                    t0 = t0.max(t);
+                } else {
+                    t1 = t1.min(t);
+                }
+                if t0 > t1 {
+                    return false;
+                }
+            }
+        }
+        true
+    }
+
+    /// Axis-aligned bounds (min, max); meaningless for an empty polygon.
+    pub fn bounds(&self) -> (Point, Point) {
+        let mut min = Point {
+            x: f64::INFINITY,
+            y: f64::INFINITY,
+        };
+        let mut max = Point {
+            x: f64::NEG_INFINITY,
+            y: f64::NEG_INFINITY,
+        };
+        for v in &self.vertices {
+            min.x = min.x.min(v.x);
+            min.y = min.y.min(v.y);
+            max.x = max.x.max(v.x);
+            max.y = max.y.max(v.y);
+        }
+        (min, max)
+    }
+
+    /// The vertex average: a point strictly inside a non-empty convex polygon.
+    pub fn interior_point(&self) -> Point {
+        let n = self.vertices.len() as f64;
+        let s = self
+            .vertices
+            .iter()
+            .fold(Point { x: 0.0, y: 0.0 }, |acc, v| acc + *v);
+        s / n
+    }
+
+    /// Translates every vertex by `d`.
+    pub fn translate(&mut self, d: Point) {
+        for v in &mut self.vertices {
+            *v = *v + d;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn p(x: f64, y: f64) -> Point {
+        Point { x, y }
+    }
+
+    #[test]
+    fn clip_square_in_half() {
+        let mut sq = ConvexPolygon::rectangle(p(0.0, 0.0), p(2.0, 2.0));
+        sq.clip(p(1.0, 0.0), 1.0);
+        assert!((sq.area() - 2.0).abs() < 1e-15);
+        assert_eq!(sq.vertices.len(), 4);
+    }
+
+    #[test]
+    fn clip_everything_and_nothing() {
+        let mut sq = ConvexPolygon::rectangle(p(0.0, 0.0), p(1.0, 1.0));
+        sq.clip(p(1.0, 1.0), 5.0);
+        assert!((sq.area() - 1.0).abs() < 1e-15);
+        sq.clip(p(1.0, 1.0), -1.0);
+        assert!(sq.is_empty());
+        assert_eq!(sq.area(), 0.0);
+    }
+
+    #[test]
+    fn clip_through_a_vertex_adds_no_sliver() {
+        let mut sq = ConvexPolygon::rectangle(p(0.0, 0.0), p(1.0, 1.0));
+        // The diagonal through (0,0) and (1,1), keeping the lower-right half.
+        sq.clip(p(-1.0, 1.0), 0.0);
+        assert_eq!(sq.vertices.len(), 3);
+        assert!((sq.area() - 0.5).abs() < 1e-15);
+    }
+
+    #[test]
+    fn segment_intersection() {
+        let sq = ConvexPolygon::rectangle(p(0.0, 0.0), p(1.0, 1.0));
+        assert!(sq.intersects_segment(p(-1.0, 0.5), p(2.0, 0.5)));
+        assert!(sq.intersects_segment(p(0.2, 0.2), p(0.3, 0.3)));
+        assert!(!sq.intersects_segment(p(-1.0, 2.0), p(2.0, 2.0)));
+        assert!(!sq.intersects_segment(p(1.5, -1.0), p(3.0, 0.5)));
+        assert!(sq.intersects_segment(p(1.0, -1.0), p(1.0, 2.0)));
+    }
+}

@@ -1,0 +1,15 @@
+//! seacover: coverage control for fleets of unmanned surface vessels.
+//!
+//! Code map:
+//! - [`geometry`] and [`coverage`]: the pure core (no I/O, deterministic,
+//!   cannot fail on validated input): region, power partition, quadrature,
+//!   mass / centroid / H(P);
+//! - [`protocol`]: the serde types of everything that crosses the wire or the
+//!   command line, and nothing else;
+//! - [`scenario`]: the shell that turns a scenario document into validated core
+//!   types and an evaluation back into its document.
+
+pub mod coverage;
+pub mod geometry;
+pub mod protocol;
+pub mod scenario;

@@ -1,0 +1,95 @@
+//! The `seacover` command: argument parsing and logging set-up over the library.
+
+use std::io::Read;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+use seacover::coverage::Options;
+use seacover::coverage::integrate::Tolerance;
+use seacover::protocol::{ErrorDetail, ErrorDocument};
+
+#[derive(Parser)]
+#[command(
+    name = "seacover",
+    version,
+    about = "Coverage control for fleets of unmanned surface vessels"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Evaluate a scenario document (file or stdin): cells, centroids, H(P).
+    Evaluate {
+        /// Scenario JSON file; standard input when omitted or "-".
+        file: Option<PathBuf>,
+        /// Relative error target of the quadrature (mass; centroid relative to
+        /// the cell's size).
+        #[arg(long, default_value_t = Tolerance::default().relative)]
+        tolerance: f64,
+    },
+}
+
+fn main() -> ExitCode {
+    tracing_subscriber::fmt()
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_default_env()
+                .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn")),
+        )
+        .with_writer(std::io::stderr)
+        .init();
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Evaluate { file, tolerance } => evaluate(file, tolerance),
+    }
+}
+
+fn fail(code: &str, message: String) -> ExitCode {
+    let doc = ErrorDocument {
+        error: ErrorDetail {
+            code: code.to_string(),
+            message,
+        },
+    };
+    eprintln!(
+        "{}",
+        serde_json::to_string(&doc).expect("error documents serialize")
+    );
+    ExitCode::from(2)
+}
+
+fn evaluate(file: Option<PathBuf>, tolerance: f64) -> ExitCode {
+    if !(tolerance.is_finite() && (1e-14..=1e-2).contains(&tolerance)) {
+        return fail(
+            "invalid",
+            format!("--tolerance: must be in [1e-14, 1e-2], got {tolerance}"),
+        );
+    }
+    let mut text = String::new();
+    let read = match &file {
+        Some(path) if path.as_os_str() != "-" => std::fs::read_to_string(path).map(|t| text = t),
+        _ => std::io::stdin().read_to_string(&mut text).map(|_| ()),
+    };
+    if let Err(e) = read {
+        return fail("io", format!("cannot read input: {e}"));
+    }
+    let options = Options {
+        tolerance: Tolerance {
+            relative: tolerance,
+            ..Tolerance::default()
+        },
+    };
+    match seacover::scenario::evaluate_text(&text, &options) {
+        Ok(doc) => {
+            println!(
+                "{}",
+                serde_json::to_string(&doc).expect("evaluations serialize")
+            );
+            ExitCode::SUCCESS
+        }
+        Err(e) => fail(e.code(), e.to_string()),
+    }
+}
