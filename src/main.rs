@@ -26,10 +26,11 @@ enum Command {
     Evaluate {
         /// Scenario JSON file; standard input when omitted or "-".
         file: Option<PathBuf>,
-        /// Relative error target of the quadrature (mass; centroid relative to
-        /// the cell's size).
-        #[arg(long, default_value_t = Tolerance::default().relative)]
-        tolerance: f64,
+        /// Use adaptive quadrature to this estimated relative error (mass;
+        /// centroid relative to the cell's size) instead of the default fixed
+        /// resolution: slower, for reference results.
+        #[arg(long)]
+        tolerance: Option<f64>,
     },
 }
 
@@ -61,13 +62,17 @@ fn fail(code: &str, message: String) -> ExitCode {
     ExitCode::from(2)
 }
 
-fn evaluate(file: Option<PathBuf>, tolerance: f64) -> ExitCode {
-    if !(tolerance.is_finite() && (1e-14..=1e-2).contains(&tolerance)) {
-        return fail(
-            "invalid",
-            format!("--tolerance: must be in [1e-14, 1e-2], got {tolerance}"),
-        );
-    }
+fn evaluate(file: Option<PathBuf>, tolerance: Option<f64>) -> ExitCode {
+    let tolerance = match tolerance {
+        None => Tolerance::default(),
+        Some(t) if t.is_finite() && (1e-14..=1e-2).contains(&t) => Tolerance::adaptive(t),
+        Some(t) => {
+            return fail(
+                "invalid",
+                format!("--tolerance: must be in [1e-14, 1e-2], got {t}"),
+            );
+        }
+    };
     let mut text = String::new();
     let read = match &file {
         Some(path) if path.as_os_str() != "-" => std::fs::read_to_string(path).map(|t| text = t),
@@ -76,12 +81,7 @@ fn evaluate(file: Option<PathBuf>, tolerance: f64) -> ExitCode {
     if let Err(e) = read {
         return fail("io", format!("cannot read input: {e}"));
     }
-    let options = Options {
-        tolerance: Tolerance {
-            relative: tolerance,
-            ..Tolerance::default()
-        },
-    };
+    let options = Options { tolerance };
     match seacover::scenario::evaluate_text(&text, &options) {
         Ok(doc) => {
             println!(

@@ -11,7 +11,7 @@
 //! - a cell far from its vessel keeps its centroid even when its mass
 //!   underflows to 0 (see [`integrate`](super::integrate) on scaling).
 
-use geo::TriangulateEarcut;
+use geo::LineString;
 
 use super::density::RiskField;
 use super::fleet::Fleet;
@@ -82,8 +82,8 @@ fn cell_figures(
 ) -> CellResult {
     let p = vessel.position;
     let zero = Point { x: 0.0, y: 0.0 };
-    let triangles = local_triangles(&geometry, p);
-    if triangles.is_empty() {
+    let pieces = local_pieces(&geometry, p);
+    if pieces.is_empty() {
         return CellResult {
             mass: 0.0,
             centroid: region.closest_point(p),
@@ -93,7 +93,7 @@ fn cell_figures(
         };
     }
     let area = geometry.area();
-    let (min, max) = bounds(&triangles, p);
+    let (min, max) = bounds(&pieces, p);
 
     let ln_k = vessel.k.ln();
     let mut terms = Vec::new();
@@ -126,7 +126,7 @@ fn cell_figures(
             center: zero,
         });
     }
-    let r = integrate(&triangles, &terms, tol);
+    let r = integrate(&pieces, &terms, tol);
     if !(r.mass > 0.0 && r.mass.is_finite()) {
         return CellResult {
             mass: 0.0,
@@ -148,30 +148,36 @@ fn cell_figures(
     }
 }
 
-/// Triangles of the cell in coordinates relative to `p`.
-fn local_triangles(geometry: &CellGeometry, p: Point) -> Vec<[Point; 3]> {
+/// The cell's rings relative to `p`, exteriors counter-clockwise and holes
+/// clockwise (the orientation [`integrate`] needs), without closing vertices.
+fn local_pieces(geometry: &CellGeometry, p: Point) -> Vec<Vec<Vec<Point>>> {
+    let local = |ring: &LineString<f64>, ccw: bool| -> Vec<Point> {
+        let mut r: Vec<Point> = ring.coords().map(|c| *c - p).collect();
+        if r.len() > 1 && r.first() == r.last() {
+            r.pop();
+        }
+        if (crate::geometry::ring_signed_area(&r) > 0.0) != ccw {
+            r.reverse();
+        }
+        r
+    };
     match geometry {
         CellGeometry::Empty => Vec::new(),
-        CellGeometry::Convex(c) => {
-            let v = &c.vertices;
-            (1..v.len().saturating_sub(1))
-                .map(|i| [v[0] - p, v[i] - p, v[i + 1] - p])
-                .collect()
-        }
+        CellGeometry::Convex(c) => vec![vec![c.vertices.iter().map(|v| *v - p).collect()]],
         CellGeometry::General(mp) => {
             mp.0.iter()
-                .flat_map(|poly| poly.earcut_triangles_iter())
-                .map(|t| {
-                    let [a, b, c] = t.to_array();
-                    [a - p, b - p, c - p]
+                .map(|poly| {
+                    std::iter::once(local(poly.exterior(), true))
+                        .chain(poly.interiors().iter().map(|h| local(h, false)))
+                        .collect()
                 })
                 .collect()
         }
     }
 }
 
-/// World-coordinate bounds of local triangles.
-fn bounds(triangles: &[[Point; 3]], p: Point) -> (Point, Point) {
+/// World-coordinate bounds of local rings.
+fn bounds(pieces: &[Vec<Vec<Point>>], p: Point) -> (Point, Point) {
     let mut min = Point {
         x: f64::INFINITY,
         y: f64::INFINITY,
@@ -180,7 +186,7 @@ fn bounds(triangles: &[[Point; 3]], p: Point) -> (Point, Point) {
         x: f64::NEG_INFINITY,
         y: f64::NEG_INFINITY,
     };
-    for v in triangles.iter().flatten() {
+    for v in pieces.iter().flatten().flatten() {
         min.x = min.x.min(v.x);
         min.y = min.y.min(v.y);
         max.x = max.x.max(v.x);

@@ -11,9 +11,11 @@
 //! - cost grows as O(n log n) in the number of vessels (see [`partition`]).
 //!
 //! Code map: [`density`] Φ; [`fleet`] f_i and the vessels; [`partition`] the
-//! cells; [`integrate`] the error-controlled quadrature of one cell;
+//! cells; [`integrate`] the integrals of one cell, by [`boundary`] edge
+//! integrals (default) or adaptive triangle quadrature (reference);
 //! [`evaluate`](mod@evaluate) ties them together.
 
+pub mod boundary;
 pub mod density;
 pub mod evaluate;
 pub mod fleet;

@@ -69,6 +69,13 @@ impl TriangleRule {
     }
 }
 
+/// The `n`-point Gauss–Legendre rule on [0, 1]: nodes ascending, weights
+/// summing to 1; exact for polynomials of degree ≤ 2n − 1.
+pub fn gauss_legendre_01(n: usize) -> (Vec<f64>, Vec<f64>) {
+    assert!((1..=64).contains(&n), "rule order out of range");
+    gauss_jacobi_01(n, 0.0)
+}
+
 /// Gauss–Jacobi rule for the weight (1 − s)^alpha on [0, 1] with `n` points,
 /// from the Golub–Welsch eigenvalue method. Returns nodes ascending and weights
 /// summing to ∫₀¹ (1 − s)^alpha ds.
@@ -158,6 +165,17 @@ mod tests {
             .map(|(&(u, _), w)| w * u.powi(a as i32))
             .sum();
         assert!((got - exact).abs() > 1e-8);
+    }
+
+    #[test]
+    fn gauss_legendre_is_exact_to_degree_2n_minus_1() {
+        for n in 1..=16 {
+            let (x, w) = gauss_legendre_01(n);
+            for d in 0..(2 * n) as i32 {
+                let got: f64 = x.iter().zip(&w).map(|(x, w)| w * x.powi(d)).sum();
+                assert!((got - 1.0 / (d as f64 + 1.0)).abs() < 1e-14, "n={n} d={d}");
+            }
+        }
     }
 
     #[test]
