@@ -194,8 +194,12 @@ fn ring_doc(ring: &geo::LineString<f64>) -> Vec<XY> {
     pts
 }
 
-/// The wire form of an evaluation.
-pub fn evaluation_document(ids: &[String], evaluation: &Evaluation) -> EvaluationDocument {
+/// The wire form of an evaluation over `region`.
+pub fn evaluation_document(
+    region: &Region,
+    ids: &[String],
+    evaluation: &Evaluation,
+) -> EvaluationDocument {
     let cells = evaluation
         .cells
         .iter()
@@ -207,7 +211,8 @@ pub fn evaluation_document(ids: &[String], evaluation: &Evaluation) -> Evaluatio
                     Some(p.vertices.iter().map(|v| xy(*v)).collect()),
                     Vec::new(),
                 ),
-                CellGeometry::General(mp) => {
+                clipped @ CellGeometry::Clipped { .. } => {
+                    let mp = clipped.pieces(region);
                     let largest =
                         mp.0.iter()
                             .max_by(|a, b| a.unsigned_area().total_cmp(&b.unsigned_area()))
@@ -248,6 +253,7 @@ pub fn evaluate_text(text: &str, options: &Options) -> Result<EvaluationDocument
     let doc = parse_document(text)?;
     let scenario = Scenario::from_document(&doc)?;
     Ok(evaluation_document(
+        &scenario.region,
         &scenario.ids,
         &scenario.evaluate(options),
     ))

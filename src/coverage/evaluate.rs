@@ -15,7 +15,7 @@ use geo::LineString;
 
 use super::density::RiskField;
 use super::fleet::Fleet;
-use super::integrate::{Gaussian, Tolerance, integrate};
+use super::integrate::{Gaussian, Mode, Tolerance, integrate};
 use super::partition::{CellGeometry, power_cells};
 use crate::geometry::{Point, Region};
 
@@ -82,7 +82,7 @@ fn cell_figures(
 ) -> CellResult {
     let p = vessel.position;
     let zero = Point { x: 0.0, y: 0.0 };
-    let pieces = local_pieces(&geometry, p);
+    let pieces = local_pieces(&geometry, p, region, options.tolerance.mode);
     if pieces.is_empty() {
         return CellResult {
             mass: 0.0,
@@ -150,22 +150,36 @@ fn cell_figures(
 
 /// The cell's rings relative to `p`, exteriors counter-clockwise and holes
 /// clockwise (the orientation [`integrate`] needs), without closing vertices.
-fn local_pieces(geometry: &CellGeometry, p: Point) -> Vec<Vec<Vec<Point>>> {
-    let local = |ring: &LineString<f64>, ccw: bool| -> Vec<Point> {
-        let mut r: Vec<Point> = ring.coords().map(|c| *c - p).collect();
-        if r.len() > 1 && r.first() == r.last() {
-            r.pop();
+/// The boundary method takes the exact clipped chain; the triangulating
+/// reference needs clean polygons.
+fn local_pieces(
+    geometry: &CellGeometry,
+    p: Point,
+    region: &Region,
+    mode: Mode,
+) -> Vec<Vec<Vec<Point>>> {
+    let shift = |ring: &[Point]| ring.iter().map(|v| *v - p).collect::<Vec<_>>();
+    match (geometry, mode) {
+        (CellGeometry::Empty, _) => Vec::new(),
+        (CellGeometry::Convex(c), _) => vec![vec![shift(&c.vertices)]],
+        (CellGeometry::Clipped { rings, .. }, Mode::Boundary) => {
+            vec![rings.iter().map(|r| shift(r)).collect()]
         }
-        if (crate::geometry::ring_signed_area(&r) > 0.0) != ccw {
-            r.reverse();
-        }
-        r
-    };
-    match geometry {
-        CellGeometry::Empty => Vec::new(),
-        CellGeometry::Convex(c) => vec![vec![c.vertices.iter().map(|v| *v - p).collect()]],
-        CellGeometry::General(mp) => {
-            mp.0.iter()
+        (CellGeometry::Clipped { .. }, Mode::Adaptive) => {
+            let local = |ring: &LineString<f64>, ccw: bool| -> Vec<Point> {
+                let mut r: Vec<Point> = ring.coords().map(|c| *c - p).collect();
+                if r.len() > 1 && r.first() == r.last() {
+                    r.pop();
+                }
+                if (crate::geometry::ring_signed_area(&r) > 0.0) != ccw {
+                    r.reverse();
+                }
+                r
+            };
+            geometry
+                .pieces(region)
+                .0
+                .iter()
                 .map(|poly| {
                     std::iter::once(local(poly.exterior(), true))
                         .chain(poly.interiors().iter().map(|h| local(h, false)))

@@ -22,9 +22,10 @@
 //! The convex cell is then intersected with Q: by half-planes when Q is
 //! convex; otherwise it is kept whole when no boundary segment of Q meets it
 //! and its interior point is in Q, dropped when none meets it and the point is
-//! outside, and only the remaining boundary cells go through `geo`'s boolean
-//! intersection (which handles non-convex shells and holes exactly; `geo`'s
-//! own Voronoi clipping is not used because it lets cells overlap holes).
+//! outside; the remaining boundary cells clip every ring of Q (shell and
+//! holes) to the convex cell, which is exact for non-convex shells and holes
+//! alike (`geo`'s own Voronoi clipping is not used because it lets cells
+//! overlap holes, and its boolean operations snap to an integer grid).
 //!
 //! Ties: vessels at the same position with the same k would own the same
 //! cell; the first in input order keeps it and the others get an empty cell.
@@ -36,17 +37,25 @@ use rstar::primitives::GeomWithData;
 use super::fleet::Fleet;
 #[cfg(test)]
 use crate::geometry::cross;
-use crate::geometry::{ConvexPolygon, Point, Region, norm2};
+use crate::geometry::{ConvexPolygon, Point, Region, norm2, ring_signed_area};
 
 /// The region a vessel is responsible for.
 #[derive(Debug, Clone, PartialEq)]
 pub enum CellGeometry {
     /// Outside Q, or dominated by other vessels.
     Empty,
-    /// A convex cell, in world coordinates.
+    /// A convex cell inside Q, in world coordinates.
     Convex(ConvexPolygon),
-    /// A cell cut by Q's boundary: one or more pieces, possibly with holes.
-    General(MultiPolygon<f64>),
+    /// A cell cut by Q's boundary: `hull` is the convex power cell and `rings`
+    /// the exact intersection Q ∩ hull as an oriented chain — the shell's part
+    /// counter-clockwise, holes' parts clockwise, possibly with zero-width
+    /// bridges between pieces (see [`ConvexPolygon::clip_ring`]). Areas and
+    /// integrals over the chain are exact; [`CellGeometry::pieces`] gives clean
+    /// polygons for display.
+    Clipped {
+        hull: ConvexPolygon,
+        rings: Vec<Vec<Point>>,
+    },
 }
 
 impl CellGeometry {
@@ -54,12 +63,65 @@ impl CellGeometry {
         matches!(self, CellGeometry::Empty)
     }
 
+    /// Whether `p` is in the cell (even–odd over the chain; on the boundary
+    /// either answer may come back).
+    pub fn contains(&self, p: Point) -> bool {
+        match self {
+            CellGeometry::Empty => false,
+            CellGeometry::Convex(c) => c.contains(p),
+            CellGeometry::Clipped { rings, .. } => {
+                let mut inside = false;
+                for ring in rings {
+                    let n = ring.len();
+                    let mut j = n - 1;
+                    for i in 0..n {
+                        let (a, b) = (ring[i], ring[j]);
+                        if (a.y > p.y) != (b.y > p.y)
+                            && p.x < a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x)
+                        {
+                            inside = !inside;
+                        }
+                        j = i;
+                    }
+                }
+                inside
+            }
+        }
+    }
+
     /// Area of the cell.
     pub fn area(&self) -> f64 {
         match self {
             CellGeometry::Empty => 0.0,
             CellGeometry::Convex(c) => c.area(),
-            CellGeometry::General(mp) => mp.unsigned_area(),
+            CellGeometry::Clipped { rings, .. } => rings
+                .iter()
+                .map(|r| ring_signed_area(r))
+                .sum::<f64>()
+                .max(0.0),
+        }
+    }
+
+    /// The cell as clean polygons (each piece with its holes), computed with
+    /// `geo`'s boolean operations. For display and triangulation only: those
+    /// snap to an integer grid, so their areas are exact to ~1e-9 relative,
+    /// while [`area`](Self::area) is exact.
+    pub fn pieces(&self, region: &Region) -> MultiPolygon<f64> {
+        let ring = |vs: &[Point]| {
+            let mut r = vs.to_vec();
+            r.push(vs[0]);
+            LineString::from(r)
+        };
+        match self {
+            CellGeometry::Empty => MultiPolygon(Vec::new()),
+            CellGeometry::Convex(c) => MultiPolygon(vec![Polygon::new(ring(&c.vertices), vec![])]),
+            CellGeometry::Clipped { hull, .. } => MultiPolygon(
+                Polygon::new(ring(&hull.vertices), vec![])
+                    .intersection(region.polygon())
+                    .into_iter()
+                    .filter(|piece| piece.unsigned_area() > 0.0)
+                    .collect(),
+            ),
         }
     }
 }
@@ -155,18 +217,28 @@ fn clip_to_region(mut cell: ConvexPolygon, region: &Region) -> CellGeometry {
             CellGeometry::Empty
         };
     }
-    let mut ring = cell.vertices.clone();
-    ring.push(ring[0]);
-    let poly = Polygon::new(LineString::from(ring), vec![]);
-    let pieces: Vec<Polygon<f64>> = poly
-        .intersection(region.polygon())
-        .into_iter()
-        .filter(|piece| piece.unsigned_area() > 0.0)
+    let (lo, hi) = (min, max);
+    let overlaps = |ring: &[Point]| {
+        let (mut a, mut b) = (ring[0], ring[0]);
+        for v in ring {
+            a.x = a.x.min(v.x);
+            a.y = a.y.min(v.y);
+            b.x = b.x.max(v.x);
+            b.y = b.y.max(v.y);
+        }
+        a.x <= hi.x && b.x >= lo.x && a.y <= hi.y && b.y >= lo.y
+    };
+    let rings: Vec<Vec<Point>> = std::iter::once(region.shell())
+        .chain(region.holes().iter().map(Vec::as_slice))
+        .filter(|r| overlaps(r))
+        .map(|r| cell.clip_ring(r))
+        .filter(|r| r.len() >= 3 && ring_signed_area(r) != 0.0)
         .collect();
-    if pieces.is_empty() {
+    let area: f64 = rings.iter().map(|r| ring_signed_area(r)).sum();
+    if area <= 0.0 {
         CellGeometry::Empty
     } else {
-        CellGeometry::General(MultiPolygon(pieces))
+        CellGeometry::Clipped { hull: cell, rings }
     }
 }
 

@@ -36,45 +36,31 @@ impl ConvexPolygon {
     /// Vertices within a relative `1e-12` of the line count as on it, so a plane
     /// through an existing vertex does not create a sliver vertex next to it.
     pub fn clip(&mut self, normal: Point, offset: f64) {
-        if self.vertices.is_empty() {
-            return;
-        }
-        let scale = self
-            .vertices
-            .iter()
-            .map(|v| dot(normal, *v).abs())
-            .fold(offset.abs(), f64::max);
-        let eps = 1e-12 * scale.max(f64::MIN_POSITIVE);
-        let side: Vec<f64> = self
-            .vertices
-            .iter()
-            .map(|v| dot(normal, *v) - offset)
-            .collect();
-        if side.iter().all(|s| *s <= eps) {
-            return;
-        }
-        if side.iter().all(|s| *s >= -eps) {
-            self.vertices.clear();
-            return;
-        }
-        let n = self.vertices.len();
-        let mut out = Vec::with_capacity(n + 1);
-        for i in 0..n {
-            let j = (i + 1) % n;
-            let (a, b) = (self.vertices[i], self.vertices[j]);
-            let (sa, sb) = (side[i], side[j]);
-            if sa <= eps {
-                out.push(a);
-            }
-            if (sa < -eps && sb > eps) || (sa > eps && sb < -eps) {
-                let t = sa / (sa - sb);
-                out.push(a + (b - a) * t);
-            }
-        }
-        self.vertices = out;
+        self.vertices = clip_ring(&self.vertices, normal, offset);
         if ring_signed_area(&self.vertices) <= 0.0 {
             self.vertices.clear();
         }
+    }
+
+    /// Clips any ring (convex or not, either orientation) to this polygon.
+    ///
+    /// For a non-convex ring the result can contain zero-width "bridges"
+    /// between pieces. They enclose no area and every boundary integral over
+    /// them cancels, so the result is exact as an oriented chain.
+    pub fn clip_ring(&self, ring: &[Point]) -> Vec<Point> {
+        let n = self.vertices.len();
+        let mut out = ring.to_vec();
+        for i in 0..n {
+            let (a, b) = (self.vertices[i], self.vertices[(i + 1) % n]);
+            let e = b - a;
+            // Inside is to the left of a→b: cross(e, x − a) ≥ 0.
+            let normal = Point { x: e.y, y: -e.x };
+            out = clip_ring(&out, normal, dot(normal, a));
+            if out.is_empty() {
+                break;
+            }
+        }
+        out
     }
 
     /// Area (non-negative).
@@ -175,6 +161,44 @@ impl ConvexPolygon {
     }
 }
 
+/// Sutherland–Hodgman against one half-plane `normal · x ≤ offset`.
+///
+/// Vertices within a relative `1e-12` of the line count as on it, so a plane
+/// through an existing vertex does not create a sliver vertex next to it.
+/// Returns an empty ring when nothing is left.
+pub fn clip_ring(ring: &[Point], normal: Point, offset: f64) -> Vec<Point> {
+    if ring.is_empty() {
+        return Vec::new();
+    }
+    let scale = ring
+        .iter()
+        .map(|v| dot(normal, *v).abs())
+        .fold(offset.abs(), f64::max);
+    let eps = 1e-12 * scale.max(f64::MIN_POSITIVE);
+    let side: Vec<f64> = ring.iter().map(|v| dot(normal, *v) - offset).collect();
+    if side.iter().all(|s| *s <= eps) {
+        return ring.to_vec();
+    }
+    if side.iter().all(|s| *s >= -eps) {
+        return Vec::new();
+    }
+    let n = ring.len();
+    let mut out = Vec::with_capacity(n + 2);
+    for i in 0..n {
+        let j = (i + 1) % n;
+        let (a, b) = (ring[i], ring[j]);
+        let (sa, sb) = (side[i], side[j]);
+        if sa <= eps {
+            out.push(a);
+        }
+        if (sa < -eps && sb > eps) || (sa > eps && sb < -eps) {
+            let t = sa / (sa - sb);
+            out.push(a + (b - a) * t);
+        }
+    }
+    if out.len() < 3 { Vec::new() } else { out }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -208,6 +232,27 @@ mod tests {
         sq.clip(p(-1.0, 1.0), 0.0);
         assert_eq!(sq.vertices.len(), 3);
         assert!((sq.area() - 0.5).abs() < 1e-15);
+    }
+
+    #[test]
+    fn clipping_a_non_convex_ring_keeps_its_area_exactly() {
+        // A U shape cut by a band across both arms: two pieces joined by a bridge.
+        let u = vec![
+            p(0.0, 0.0),
+            p(30.0, 0.0),
+            p(30.0, 30.0),
+            p(20.0, 30.0),
+            p(20.0, 10.0),
+            p(10.0, 10.0),
+            p(10.0, 30.0),
+            p(0.0, 30.0),
+        ];
+        let band = ConvexPolygon::rectangle(p(-5.0, 20.0), p(35.0, 25.0));
+        let clipped = band.clip_ring(&u);
+        assert!((ring_signed_area(&clipped) - 2.0 * 10.0 * 5.0).abs() < 1e-12);
+        // A clockwise hole stays clockwise: its area counts negative.
+        let hole: Vec<Point> = vec![p(1.0, 21.0), p(1.0, 22.0), p(2.0, 22.0), p(2.0, 21.0)];
+        assert!((ring_signed_area(&band.clip_ring(&hole)) + 1.0).abs() < 1e-12);
     }
 
     #[test]

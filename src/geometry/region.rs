@@ -19,7 +19,7 @@ use geo::{Intersects, Line, LineString, Polygon};
 use rstar::primitives::{GeomWithData, Line as RLine};
 use rstar::{AABB, RTree};
 
-use super::{Point, dot, ring_signed_area, segment_closest};
+use super::{Point, dot, norm2, ring_signed_area, segment_closest};
 
 /// Largest absolute coordinate accepted, in metres (10 000 km): far beyond any
 /// mission, small enough that squared distances never overflow.
@@ -268,6 +268,18 @@ fn clean_ring(ring: Vec<Point>, role: RingRole) -> Result<Vec<Point>, RegionErro
     if out.len() < 3 {
         return Err(RegionError::TooFewVertices(role));
     }
+    let o = out[0];
+    let far = out
+        .iter()
+        .copied()
+        .max_by(|a, b| norm2(*a - o).total_cmp(&norm2(*b - o)))
+        .unwrap_or(o);
+    if out
+        .iter()
+        .all(|v| RobustKernel::orient2d(o, far, *v) == Orientation::Collinear)
+    {
+        return Err(RegionError::Degenerate(role));
+    }
     Ok(out)
 }
 
@@ -440,10 +452,10 @@ mod tests {
     #[test]
     fn rejects_degenerate_and_short_rings() {
         let line = ring(&[(0.0, 0.0), (1.0, 1.0), (2.0, 2.0)]);
-        assert!(matches!(
+        assert_eq!(
             Region::new(line, vec![]).unwrap_err(),
-            RegionError::Degenerate(_) | RegionError::SelfIntersection(_)
-        ));
+            RegionError::Degenerate(RingRole::Shell)
+        );
         let two = ring(&[(0.0, 0.0), (1.0, 1.0), (1.0, 1.0), (0.0, 0.0)]);
         assert_eq!(
             Region::new(two, vec![]).unwrap_err(),
