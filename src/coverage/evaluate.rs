@@ -11,11 +11,9 @@
 //! - a cell far from its vessel keeps its centroid even when its mass
 //!   underflows to 0 (see [`integrate`](super::integrate) on scaling).
 
-use geo::LineString;
-
 use super::density::RiskField;
 use super::fleet::Fleet;
-use super::integrate::{Gaussian, Mode, Tolerance, integrate};
+use super::integrate::{Gaussian, Tolerance, integrate};
 use super::partition::{CellGeometry, power_cells};
 use crate::geometry::{Point, Region};
 
@@ -82,7 +80,7 @@ fn cell_figures(
 ) -> CellResult {
     let p = vessel.position;
     let zero = Point { x: 0.0, y: 0.0 };
-    let pieces = local_pieces(&geometry, p, region, options.tolerance.mode);
+    let pieces = local_pieces(&geometry, p);
     if pieces.is_empty() {
         return CellResult {
             mass: 0.0,
@@ -148,45 +146,15 @@ fn cell_figures(
     }
 }
 
-/// The cell's rings relative to `p`, exteriors counter-clockwise and holes
-/// clockwise (the orientation [`integrate`] needs), without closing vertices.
-/// The boundary method takes the exact clipped chain; the triangulating
-/// reference needs clean polygons.
-fn local_pieces(
-    geometry: &CellGeometry,
-    p: Point,
-    region: &Region,
-    mode: Mode,
-) -> Vec<Vec<Vec<Point>>> {
+/// The cell's rings relative to `p`: exteriors counter-clockwise and holes
+/// clockwise (for a clipped cell, the exact oriented chain), as [`integrate`]
+/// needs them.
+fn local_pieces(geometry: &CellGeometry, p: Point) -> Vec<Vec<Vec<Point>>> {
     let shift = |ring: &[Point]| ring.iter().map(|v| *v - p).collect::<Vec<_>>();
-    match (geometry, mode) {
-        (CellGeometry::Empty, _) => Vec::new(),
-        (CellGeometry::Convex(c), _) => vec![vec![shift(&c.vertices)]],
-        (CellGeometry::Clipped { rings, .. }, Mode::Boundary) => {
-            vec![rings.iter().map(|r| shift(r)).collect()]
-        }
-        (CellGeometry::Clipped { .. }, Mode::Adaptive) => {
-            let local = |ring: &LineString<f64>, ccw: bool| -> Vec<Point> {
-                let mut r: Vec<Point> = ring.coords().map(|c| *c - p).collect();
-                if r.len() > 1 && r.first() == r.last() {
-                    r.pop();
-                }
-                if (crate::geometry::ring_signed_area(&r) > 0.0) != ccw {
-                    r.reverse();
-                }
-                r
-            };
-            geometry
-                .pieces(region)
-                .0
-                .iter()
-                .map(|poly| {
-                    std::iter::once(local(poly.exterior(), true))
-                        .chain(poly.interiors().iter().map(|h| local(h, false)))
-                        .collect()
-                })
-                .collect()
-        }
+    match geometry {
+        CellGeometry::Empty => Vec::new(),
+        CellGeometry::Convex(c) => vec![vec![shift(&c.vertices)]],
+        CellGeometry::Clipped { rings, .. } => vec![rings.iter().map(|r| shift(r)).collect()],
     }
 }
 

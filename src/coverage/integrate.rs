@@ -24,8 +24,8 @@
 //! - [`Mode::Boundary`] (default): each Gaussian's integrals over the polygon
 //!   are reduced exactly to integrals along its edges ([`super::boundary`]) and
 //!   those are done by Gauss–Legendre: ~10⁻¹³ relative, one `exp` per node.
-//! - [`Mode::Adaptive`] (reference): the cell is triangulated (ear clipping,
-//!   `geo`), triangles are split until h √a_max ≤ κ, then refined globally where
+//! - [`Mode::Adaptive`] (reference): every ring is cut into a signed fan of
+//!   triangles, split until h √a_max ≤ κ, then refined globally where
 //!   a degree-11 and a degree-9 collapsed Gauss rule disagree most, until the
 //!   estimated error is below `tol · M` for the mass and `tol · M · diam` for the
 //!   first moments. The estimate bounds the degree-9 error, so the degree-11
@@ -35,8 +35,6 @@
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 use std::sync::LazyLock;
-
-use geo::{LineString, Polygon, TriangulateEarcut};
 
 use super::boundary::polygon_integrals;
 use crate::geometry::{Point, TriangleRule, cross, norm2, segment_distance2};
@@ -118,6 +116,8 @@ type Tri = [Point; 3];
 
 struct Piece {
     tri: Tri,
+    /// +1 or −1: the orientation of the fan triangle this came from.
+    sign: f64,
     values: [f64; 3],
     key: f64,
 }
@@ -209,14 +209,18 @@ pub fn integrate(pieces: &Pieces, terms: &[Gaussian], tol: Tolerance) -> Scaled 
         };
     }
 
-    let triangles: Vec<Tri> = pieces
+    // Signed fans: Σ_i ±(r₀, r_i, r_{i+1}) is exactly the ring's interior
+    // (winding number), so this is exact for any oriented chain, bridges and
+    // clockwise hole parts included.
+    let triangles: Vec<(Tri, f64)> = rings
         .iter()
-        .filter(|rings| rings.first().is_some_and(|r| r.len() >= 3))
-        .flat_map(|rings| {
-            let ls = |r: &Vec<Point>| LineString::from(r.clone());
-            Polygon::new(ls(&rings[0]), rings[1..].iter().map(ls).collect()).earcut_triangles()
+        .flat_map(|r| {
+            (1..r.len() - 1).filter_map(move |i| {
+                let t = [r[0], r[i], r[i + 1]];
+                let c = cross(t[1] - t[0], t[2] - t[0]);
+                (c != 0.0).then_some((t, c.signum()))
+            })
         })
-        .map(|t| t.to_array())
         .collect();
     if triangles.is_empty() {
         return empty;
@@ -224,7 +228,7 @@ pub fn integrate(pieces: &Pieces, terms: &[Gaussian], tol: Tolerance) -> Scaled 
     let a_max = kept.iter().map(|t| t.a).fold(0.0, f64::max);
 
     // A priori split, bounded so that the adaptive phase keeps room.
-    let mut start: Vec<Tri> = triangles.to_vec();
+    let mut start: Vec<(Tri, f64)> = triangles;
     let h_max2 = KAPPA * KAPPA / a_max;
     loop {
         if start.len() * 4 > tol.max_triangles / 4 {
@@ -232,12 +236,12 @@ pub fn integrate(pieces: &Pieces, terms: &[Gaussian], tol: Tolerance) -> Scaled 
         }
         let mut split_any = false;
         let mut next = Vec::with_capacity(start.len() * 2);
-        for t in start {
+        for (t, sign) in start {
             if longest_edge2(&t) > h_max2 {
-                next.extend(split(&t));
+                next.extend(split(&t).map(|c| (c, sign)));
                 split_any = true;
             } else {
-                next.push(t);
+                next.push((t, sign));
             }
         }
         start = next;
@@ -246,7 +250,7 @@ pub fn integrate(pieces: &Pieces, terms: &[Gaussian], tol: Tolerance) -> Scaled 
         }
     }
 
-    let piece = |tri: Tri| -> Piece {
+    let piece = |tri: Tri, sign: f64| -> Piece {
         let h = apply(&RULE_HI, &tri, &kept);
         let l = apply(&RULE_LO, &tri, &kept);
         let errors = [
@@ -257,23 +261,24 @@ pub fn integrate(pieces: &Pieces, terms: &[Gaussian], tol: Tolerance) -> Scaled 
         let key = errors[0] + errors[1].max(errors[2]) / diam;
         Piece {
             tri,
-            values: h,
+            sign,
+            values: h.map(|v| sign * v),
             key,
         }
     };
 
-    let mut heap: BinaryHeap<Piece> = start.into_iter().map(piece).collect();
+    let mut heap: BinaryHeap<Piece> = start.into_iter().map(|(t, sign)| piece(t, sign)).collect();
     let (mut total, mut err) = (0.0, 0.0);
     for p in heap.iter() {
         total += p.values[0];
         err += p.key;
     }
-    while err > tol.relative * total && heap.len() + 3 <= tol.max_triangles {
+    while err > tol.relative * total.abs() && heap.len() + 3 <= tol.max_triangles {
         let worst = heap.pop().expect("heap is never empty here");
         total -= worst.values[0];
         err -= worst.key;
         for t in split(&worst.tri) {
-            let p = piece(t);
+            let p = piece(t, worst.sign);
             total += p.values[0];
             err += p.key;
             heap.push(p);

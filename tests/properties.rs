@@ -1,0 +1,272 @@
+//! Properties of the partition and the integrals on random scenarios
+//! (proptest): random regions (convex, non-convex, with holes), random fleets
+//! partly outside Q, random actuator strengths and risk objects.
+
+use proptest::prelude::*;
+use seacover::coverage::integrate::Tolerance;
+use seacover::coverage::{Evaluation, Fleet, Options, RiskField, RiskObject, Vessel, evaluate};
+use seacover::geometry::{Point, Region};
+
+fn p(x: f64, y: f64) -> Point {
+    Point { x, y }
+}
+
+#[derive(Debug, Clone)]
+struct Case {
+    shell: Vec<Point>,
+    holes: Vec<Vec<Point>>,
+    base: f64,
+    objects: Vec<RiskObject>,
+    vessels: Vec<Vessel>,
+}
+
+impl Case {
+    fn build(&self) -> (Region, RiskField, Fleet) {
+        (
+            Region::new(self.shell.clone(), self.holes.clone())
+                .expect("generated regions are valid"),
+            RiskField::new(self.base, self.objects.clone()).unwrap(),
+            Fleet::new(self.vessels.clone()).unwrap(),
+        )
+    }
+
+    fn run(&self, options: &Options) -> (Region, RiskField, Fleet, Evaluation) {
+        let (r, d, f) = self.build();
+        let e = evaluate(&r, &d, &f, options);
+        (r, d, f, e)
+    }
+
+    /// The same scenario moved by a rotation `theta` and a translation `t`.
+    fn moved(&self, theta: f64, t: Point) -> Case {
+        let (s, c) = theta.sin_cos();
+        let m = |q: Point| p(c * q.x - s * q.y + t.x, s * q.x + c * q.y + t.y);
+        Case {
+            shell: self.shell.iter().map(|q| m(*q)).collect(),
+            holes: self
+                .holes
+                .iter()
+                .map(|h| h.iter().map(|q| m(*q)).collect())
+                .collect(),
+            base: self.base,
+            objects: self
+                .objects
+                .iter()
+                .map(|o| RiskObject {
+                    center: m(o.center),
+                    ..*o
+                })
+                .collect(),
+            vessels: self
+                .vessels
+                .iter()
+                .map(|v| Vessel {
+                    position: m(v.position),
+                    ..*v
+                })
+                .collect(),
+        }
+    }
+}
+
+/// A star-shaped polygon around (50, 50): non-convex in general.
+fn star() -> impl Strategy<Value = Vec<Point>> {
+    (5usize..14, prop::collection::vec(20.0f64..60.0, 14)).prop_map(|(n, radii)| {
+        (0..n)
+            .map(|i| {
+                let a = std::f64::consts::TAU * i as f64 / n as f64;
+                p(50.0 + radii[i] * a.cos(), 50.0 + radii[i] * a.sin())
+            })
+            .collect()
+    })
+}
+
+/// A 100 × 100 square with up to three square holes on a grid (disjoint).
+fn square_with_holes() -> impl Strategy<Value = (Vec<Point>, Vec<Vec<Point>>)> {
+    prop::collection::vec((0usize..9, 2.0f64..9.0), 0..4).prop_map(|hs| {
+        let shell = vec![p(0.0, 0.0), p(100.0, 0.0), p(100.0, 100.0), p(0.0, 100.0)];
+        let mut used = [false; 9];
+        let mut holes = Vec::new();
+        for (slot, half) in hs {
+            if std::mem::replace(&mut used[slot], true) {
+                continue;
+            }
+            let (cx, cy) = (
+                20.0 + 30.0 * (slot % 3) as f64,
+                20.0 + 30.0 * (slot / 3) as f64,
+            );
+            holes.push(vec![
+                p(cx - half, cy - half),
+                p(cx + half, cy - half),
+                p(cx + half, cy + half),
+                p(cx - half, cy + half),
+            ]);
+        }
+        (shell, holes)
+    })
+}
+
+fn case() -> impl Strategy<Value = Case> {
+    let region = prop_oneof![star().prop_map(|s| (s, vec![])), square_with_holes(),];
+    let vessel = (
+        -20.0f64..120.0,
+        -20.0f64..120.0,
+        prop_oneof![Just(0.5), 0.2f64..2.0],
+    );
+    let object = (0.0f64..100.0, 0.0f64..100.0, 0.5f64..20.0, 3.0f64..30.0);
+    (
+        region,
+        prop_oneof![Just(0.0), 0.01f64..1.0],
+        prop::collection::vec(object, 0..5),
+        prop::collection::vec(vessel, 1..25),
+        prop_oneof![Just(0.001), 1e-4f64..1e-2],
+    )
+        .prop_filter("some density", |(_, base, objs, _, _)| {
+            *base > 0.0 || !objs.is_empty()
+        })
+        .prop_map(|((shell, holes), base, objs, vs, beta)| Case {
+            shell,
+            holes,
+            base,
+            objects: objs
+                .into_iter()
+                .map(|(x, y, alpha, sigma)| RiskObject {
+                    center: p(x, y),
+                    alpha,
+                    sigma,
+                })
+                .collect(),
+            vessels: vs
+                .into_iter()
+                .map(|(x, y, k)| Vessel {
+                    position: p(x, y),
+                    k,
+                    beta,
+                })
+                .collect(),
+        })
+}
+
+fn in_hull(centroid: Point, vertices: &[Point]) -> bool {
+    use geo::{ConvexHull, Intersects, MultiPoint};
+    let hull = MultiPoint::from(
+        vertices
+            .iter()
+            .map(|v| geo::Point::from(*v))
+            .collect::<Vec<_>>(),
+    )
+    .convex_hull();
+    // Allow rounding-sized slack by testing a tiny neighbourhood.
+    [
+        (0.0, 0.0),
+        (1e-7, 0.0),
+        (-1e-7, 0.0),
+        (0.0, 1e-7),
+        (0.0, -1e-7),
+    ]
+    .iter()
+    .any(|(dx, dy)| hull.intersects(&p(centroid.x + dx, centroid.y + dy)))
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(96))]
+
+    /// Cells tile Q: areas add up to area(Q), every sampled point of Q is in
+    /// a cell, and it is in the cell of a vessel whose f is largest there.
+    #[test]
+    fn cells_tile_the_region(c in case(), samples in prop::collection::vec((0.0f64..1.0, 0.0f64..1.0), 60)) {
+        let (region, _, fleet, e) = c.run(&Options::default());
+        let total: f64 = e.cells.iter().map(|c| c.area).sum();
+        prop_assert!((total - region.area()).abs() <= 1e-9 * region.area(), "{total} vs {}", region.area());
+        let (lo, hi) = region.bounds();
+        for (u, v) in samples {
+            let q = p(lo.x + u * (hi.x - lo.x), lo.y + v * (hi.y - lo.y));
+            if !region.contains(q) {
+                continue;
+            }
+            let owners: Vec<usize> = (0..e.cells.len()).filter(|&i| e.cells[i].geometry.contains(q)).collect();
+            prop_assert!(!owners.is_empty(), "{q:?} is in no cell");
+            let best = fleet.vessels().iter().map(|v| v.performance(q)).fold(0.0, f64::max);
+            for i in owners {
+                let fi = fleet.vessels()[i].performance(q);
+                prop_assert!(fi >= best * (1.0 - 1e-9), "{q:?} given to {i} with f {fi} < {best}");
+            }
+        }
+    }
+
+    /// H is the sum of the masses, and centroids lie in their cells' hulls.
+    #[test]
+    fn masses_sum_to_h_and_centroids_are_in_their_hulls(c in case()) {
+        let (region, _, _, e) = c.run(&Options::default());
+        let sum: f64 = e.cells.iter().map(|c| c.mass).sum();
+        prop_assert!((sum - e.h).abs() <= 1e-12 * e.h.abs().max(1e-300));
+        for (i, cell) in e.cells.iter().enumerate() {
+            prop_assert!(cell.mass.is_finite() && cell.mass >= 0.0);
+            prop_assert!(cell.centroid.x.is_finite() && cell.centroid.y.is_finite());
+            if cell.geometry.is_empty() {
+                prop_assert_eq!(cell.mass, 0.0);
+                let nearest = region.closest_point(cell.centroid);
+                prop_assert!((nearest.x - cell.centroid.x).abs() < 1e-9 && (nearest.y - cell.centroid.y).abs() < 1e-9);
+                continue;
+            }
+            let vertices: Vec<Point> = cell.geometry.pieces(&region).0.iter()
+                .flat_map(|poly| poly.exterior().coords().copied().collect::<Vec<_>>())
+                .collect();
+            prop_assert!(in_hull(cell.centroid, &vertices), "cell {i}: {:?}", cell.centroid);
+        }
+    }
+
+    /// The fast integrator agrees with the independent adaptive triangle
+    /// quadrature far inside the required accuracy (1e-6 mass, 1e-4 m).
+    #[test]
+    fn fast_and_reference_integrators_agree(c in case()) {
+        let (_, _, _, fast) = c.run(&Options::default());
+        let (_, _, _, slow) = c.run(&Options { tolerance: Tolerance::adaptive(1e-10) });
+        prop_assert!((fast.h - slow.h).abs() <= 1e-8 * slow.h);
+        for (a, b) in fast.cells.iter().zip(&slow.cells) {
+            prop_assert!((a.mass - b.mass).abs() <= 1e-8 * b.mass.max(1e-12 * slow.h), "{} vs {}", a.mass, b.mass);
+            if b.mass > 1e-9 * slow.h {
+                prop_assert!((a.centroid.x - b.centroid.x).abs() < 1e-6 && (a.centroid.y - b.centroid.y).abs() < 1e-6,
+                    "{:?} vs {:?}", a.centroid, b.centroid);
+            }
+        }
+    }
+
+    /// H equals ∫_Q max_i f_i Φ computed independently on a fine grid.
+    #[test]
+    fn h_matches_a_grid_integral_of_the_best_performance(c in case()) {
+        let (region, risk, fleet, e) = c.run(&Options::default());
+        let (lo, hi) = region.bounds();
+        let n = 500;
+        let (dx, dy) = ((hi.x - lo.x) / n as f64, (hi.y - lo.y) / n as f64);
+        let mut grid = 0.0;
+        for i in 0..n {
+            for j in 0..n {
+                let q = p(lo.x + (i as f64 + 0.5) * dx, lo.y + (j as f64 + 0.5) * dy);
+                if region.contains(q) {
+                    let best = fleet.vessels().iter().map(|v| v.performance(q)).fold(0.0, f64::max);
+                    grid += best * risk.value(q);
+                }
+            }
+        }
+        grid *= dx * dy;
+        // Midpoint rule with a staircase boundary: O(h) error near ∂Q.
+        prop_assert!((grid - e.h).abs() <= 2e-2 * e.h, "grid {grid} vs {}", e.h);
+    }
+
+    /// Moving the whole scenario rigidly moves the results with it.
+    #[test]
+    fn results_move_with_a_rigid_motion(c in case(), theta in -3.2f64..3.2, tx in -500.0f64..500.0, ty in -500.0f64..500.0) {
+        let (_, _, _, a) = c.run(&Options::default());
+        let (_, _, _, b) = c.moved(theta, p(tx, ty)).run(&Options::default());
+        prop_assert!((a.h - b.h).abs() <= 1e-9 * a.h);
+        let (s, co) = theta.sin_cos();
+        for (x, y) in a.cells.iter().zip(&b.cells) {
+            prop_assert!((x.mass - y.mass).abs() <= 1e-9 * x.mass.max(1e-12 * a.h));
+            prop_assert!((x.area - y.area).abs() <= 1e-8 * x.area.max(1.0));
+            if x.mass > 1e-9 * a.h {
+                let m = p(co * x.centroid.x - s * x.centroid.y + tx, s * x.centroid.x + co * x.centroid.y + ty);
+                prop_assert!((m.x - y.centroid.x).abs() < 1e-6 && (m.y - y.centroid.y).abs() < 1e-6, "{m:?} vs {:?}", y.centroid);
+            }
+        }
+    }
+}
