@@ -149,12 +149,12 @@ impl Scenario {
                 )
                 .into());
             }
-            if let Some(psi) = v.psi {
-                if !psi.is_finite() {
-                    return Err(
-                        InputError::invalid(format!("vessels[{i}].psi"), "must be finite").into(),
-                    );
-                }
+            if let Some(psi) = v.psi
+                && !psi.is_finite()
+            {
+                return Err(
+                    InputError::invalid(format!("vessels[{i}].psi"), "must be finite").into(),
+                );
             }
             ids.push(v.id.clone());
         }

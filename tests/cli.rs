@@ -159,7 +159,8 @@ fn bad_polygons_are_rejected() {
 
 #[test]
 fn bad_values_are_rejected_naming_the_field() {
-    let cases: Vec<(Box<dyn FnOnce(&mut Value)>, &str)> = vec![
+    type Edit = Box<dyn FnOnce(&mut Value)>;
+    let cases: Vec<(Edit, &str)> = vec![
         (
             Box::new(|d| d["risk"]["objects"][1]["sigma"] = json!(0)),
             "risk.objects[1].sigma",

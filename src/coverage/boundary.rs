@@ -31,7 +31,7 @@ use std::sync::LazyLock;
 
 use super::integrate::Gaussian;
 use crate::geometry::quadrature::gauss_legendre_01;
-use crate::geometry::{Point, dot, norm2, segment_distance2};
+use crate::geometry::{Point, dot, norm2};
 
 /// Gauss–Legendre points per piece.
 const NODES: usize = 12;
@@ -41,14 +41,15 @@ static GL: LazyLock<(Vec<f64>, Vec<f64>)> = LazyLock::new(|| gauss_legendre_01(N
 const CUTOFF: f64 = 50.0;
 
 /// [∫ g, ∫ x₁ g, ∫ x₂ g] over the polygon `rings` (coordinates of the caller's
-/// frame; interior on the left of every directed edge).
-pub fn polygon_integrals(rings: &[Vec<Point>], g: &Gaussian) -> [f64; 3] {
+/// frame; interior on the left of every directed edge). `far` selects the
+/// split form and must be set exactly when g's centre is outside the polygon
+/// with a·dist² ≥ 1 (see [`crate::geometry::ring_distances`]).
+pub fn polygon_integrals<R: AsRef<[Point]>>(rings: &[R], g: &Gaussian, far: bool) -> [f64; 3] {
     let m = g.center;
-    let inside = contains(rings, m);
-    let far = !inside && g.a * distance2(rings, m) >= 1.0;
     let mut mass = 0.0;
     let mut moment = Point { x: 0.0, y: 0.0 };
     for ring in rings {
+        let ring = ring.as_ref();
         let n = ring.len();
         for i in 0..n {
             let a = ring[i] - m;
@@ -140,33 +141,4 @@ fn edge(a: f64, lambda: f64, h: f64, s0: f64, s1: f64, far: bool) -> (f64, f64) 
     } else {
         (h / (2.0 * a) * mass_integral * scale, line * scale)
     }
-}
-
-/// Even–odd containment over all rings (so holes count as outside).
-fn contains(rings: &[Vec<Point>], p: Point) -> bool {
-    let mut inside = false;
-    for ring in rings {
-        let n = ring.len();
-        let mut j = n - 1;
-        for i in 0..n {
-            let (a, b) = (ring[i], ring[j]);
-            if (a.y > p.y) != (b.y > p.y) && p.x < a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x) {
-                inside = !inside;
-            }
-            j = i;
-        }
-    }
-    inside
-}
-
-/// Squared distance from `p` to the polygon's boundary.
-fn distance2(rings: &[Vec<Point>], p: Point) -> f64 {
-    let mut d = f64::INFINITY;
-    for ring in rings {
-        let n = ring.len();
-        for i in 0..n {
-            d = d.min(segment_distance2(p, ring[i], ring[(i + 1) % n]));
-        }
-    }
-    d
 }

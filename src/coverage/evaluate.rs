@@ -15,7 +15,7 @@ use super::density::RiskField;
 use super::fleet::Fleet;
 use super::integrate::{Gaussian, Tolerance, integrate};
 use super::partition::{CellGeometry, power_cells};
-use crate::geometry::{Point, Region};
+use crate::geometry::{Point, Region, bounds};
 
 /// Evaluation settings.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -91,7 +91,7 @@ fn cell_figures(
         };
     }
     let area = geometry.area();
-    let (min, max) = bounds(&pieces, p);
+    let (min, max) = world_bounds(&pieces, p);
 
     let ln_k = vessel.k.ln();
     let mut terms = Vec::new();
@@ -159,20 +159,7 @@ fn local_pieces(geometry: &CellGeometry, p: Point) -> Vec<Vec<Vec<Point>>> {
 }
 
 /// World-coordinate bounds of local rings.
-fn bounds(pieces: &[Vec<Vec<Point>>], p: Point) -> (Point, Point) {
-    let mut min = Point {
-        x: f64::INFINITY,
-        y: f64::INFINITY,
-    };
-    let mut max = Point {
-        x: f64::NEG_INFINITY,
-        y: f64::NEG_INFINITY,
-    };
-    for v in pieces.iter().flatten().flatten() {
-        min.x = min.x.min(v.x);
-        min.y = min.y.min(v.y);
-        max.x = max.x.max(v.x);
-        max.y = max.y.max(v.y);
-    }
+fn world_bounds(pieces: &[Vec<Vec<Point>>], p: Point) -> (Point, Point) {
+    let (min, max) = bounds(pieces.iter().flatten().flatten());
     (min + p, max + p)
 }

@@ -37,7 +37,7 @@ use std::collections::BinaryHeap;
 use std::sync::LazyLock;
 
 use super::boundary::polygon_integrals;
-use crate::geometry::{Point, TriangleRule, cross, norm2, segment_distance2};
+use crate::geometry::{Point, RingDistances, TriangleRule, bounds, cross, norm2, ring_distances};
 
 static RULE_HI: LazyLock<TriangleRule> = LazyLock::new(|| TriangleRule::collapsed_gauss(6));
 static RULE_LO: LazyLock<TriangleRule> = LazyLock::new(|| TriangleRule::collapsed_gauss(5));
@@ -156,46 +156,53 @@ pub fn integrate(pieces: &Pieces, terms: &[Gaussian], tol: Tolerance) -> Scaled 
     if rings.is_empty() || terms.is_empty() {
         return empty;
     }
-    let (mut lo, mut hi) = (rings[0][0], rings[0][0]);
-    for v in rings.iter().copied().flatten() {
-        lo.x = lo.x.min(v.x);
-        lo.y = lo.y.min(v.y);
-        hi.x = hi.x.max(v.x);
-        hi.y = hi.y.max(v.y);
-    }
+    let (lo, hi) = bounds(rings.iter().copied().flatten());
     let diam = norm2(hi - lo).sqrt();
     if diam == 0.0 {
         return empty;
     }
 
-    // Log bounds of every term over the cell.
+    // Where every term's centre lies, and its log bounds over the cell.
+    let places: Vec<RingDistances> = terms
+        .iter()
+        .map(|t| ring_distances(&rings, t.center))
+        .collect();
     let bounds: Vec<(f64, f64)> = terms
         .iter()
-        .map(|t| {
-            let (dmin2, dmax2) = distance_range2(&rings, t.center);
-            (t.log_weight - t.a * dmin2, t.log_weight - t.a * dmax2)
+        .zip(&places)
+        .map(|(t, at)| {
+            let dmin2 = if at.inside { 0.0 } else { at.boundary2 };
+            (
+                t.log_weight - t.a * dmin2,
+                t.log_weight - t.a * at.farthest2,
+            )
         })
         .collect();
     let s = bounds.iter().map(|b| b.0).fold(f64::NEG_INFINITY, f64::max);
     let floor = bounds.iter().map(|b| b.1).fold(f64::NEG_INFINITY, f64::max);
     let cut = floor + (1e-3 * tol.relative / terms.len() as f64).ln();
-    let kept: Vec<Gaussian> = terms
+    // Each kept term with whether its centre is far outside the cell, which
+    // selects the boundary method's split form.
+    let kept: Vec<(Gaussian, bool)> = terms
         .iter()
         .zip(&bounds)
-        .filter(|(_, b)| b.0 >= cut)
-        .map(|(t, _)| Gaussian {
-            log_weight: t.log_weight - s,
-            ..*t
+        .zip(&places)
+        .filter(|((_, b), _)| b.0 >= cut)
+        .map(|((t, _), at)| {
+            let g = Gaussian {
+                log_weight: t.log_weight - s,
+                ..*t
+            };
+            (g, !at.inside && t.a * at.boundary2 >= 1.0)
         })
         .collect();
 
     if tol.mode == Mode::Boundary {
-        let rings: Vec<Vec<Point>> = rings.into_iter().cloned().collect();
         let mut sum = [0.0; 3];
-        for g in &kept {
-            let v = polygon_integrals(&rings, g);
-            for k in 0..3 {
-                sum[k] += v[k];
+        for (g, far) in &kept {
+            let v = polygon_integrals(&rings, g, *far);
+            for (acc, x) in sum.iter_mut().zip(v) {
+                *acc += x;
             }
         }
         return Scaled {
@@ -225,6 +232,7 @@ pub fn integrate(pieces: &Pieces, terms: &[Gaussian], tol: Tolerance) -> Scaled 
     if triangles.is_empty() {
         return empty;
     }
+    let kept: Vec<Gaussian> = kept.into_iter().map(|(g, _)| g).collect();
     let a_max = kept.iter().map(|t| t.a).fold(0.0, f64::max);
 
     // A priori split, bounded so that the adaptive phase keeps room.
@@ -289,8 +297,8 @@ pub fn integrate(pieces: &Pieces, terms: &[Gaussian], tol: Tolerance) -> Scaled 
 
     let mut sum = [0.0; 3];
     for p in heap.iter() {
-        for k in 0..3 {
-            sum[k] += p.values[k];
+        for (acc, x) in sum.iter_mut().zip(p.values) {
+            *acc += x;
         }
     }
     Scaled {
@@ -341,28 +349,6 @@ fn split(t: &Tri) -> [Tri; 4] {
         [m20, m12, t[2]],
         [m01, m12, m20],
     ]
-}
-
-/// Smallest and largest squared distance from `m` to the polygon bounded by
-/// `rings` (even–odd, so holes are outside).
-fn distance_range2(rings: &[&Vec<Point>], m: Point) -> (f64, f64) {
-    let mut dmin = f64::INFINITY;
-    let mut dmax: f64 = 0.0;
-    let mut inside = false;
-    for ring in rings {
-        let n = ring.len();
-        let mut j = n - 1;
-        for i in 0..n {
-            let (a, b) = (ring[i], ring[j]);
-            dmax = dmax.max(norm2(a - m));
-            dmin = dmin.min(segment_distance2(m, a, b));
-            if (a.y > m.y) != (b.y > m.y) && m.x < a.x + (m.y - a.y) / (b.y - a.y) * (b.x - a.x) {
-                inside = !inside;
-            }
-            j = i;
-        }
-    }
-    (if inside { 0.0 } else { dmin }, dmax)
 }
 
 #[cfg(test)]

@@ -6,7 +6,7 @@
 //! - pure and deterministic: no I/O, no threads, no clocks, no randomness;
 //! - inputs are validated once, by the constructors [`RiskField::new`] and
 //!   [`Fleet::new`] (and [`crate::geometry::Region::new`]); after that
-//!   [`evaluate`] cannot fail: an empty cell is a result (mass 0, centroid the
+//!   [`evaluate()`] cannot fail: an empty cell is a result (mass 0, centroid the
 //!   nearest point of Q), never an error or a NaN;
 //! - cost grows as O(n log n) in the number of vessels (see [`partition`]).
 //!
@@ -68,7 +68,20 @@ pub(crate) fn check_range(
         let bracket = if low_inclusive { '[' } else { '(' };
         Err(InputError::invalid(
             field(),
-            format!("must be a finite number in {bracket}{low:e}, {high:e}], got {value}"),
+            format!(
+                "must be a finite number in {bracket}{}, {}], got {value}",
+                readable(low),
+                readable(high)
+            ),
         ))
+    }
+}
+
+/// 0, 0.5, 100 as written; 1e12, -1e7, 1e-6 in exponent form.
+fn readable(x: f64) -> String {
+    if x != 0.0 && (x.abs() >= 1e4 || x.abs() < 1e-3) {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
     }
 }

@@ -37,7 +37,9 @@ use rstar::primitives::GeomWithData;
 use super::fleet::Fleet;
 #[cfg(test)]
 use crate::geometry::cross;
-use crate::geometry::{ConvexPolygon, Point, Region, norm2, ring_signed_area};
+use crate::geometry::{
+    ConvexPolygon, Point, Region, bounds, even_odd_contains, norm2, ring_signed_area,
+};
 
 /// The region a vessel is responsible for.
 #[derive(Debug, Clone, PartialEq)]
@@ -69,23 +71,7 @@ impl CellGeometry {
         match self {
             CellGeometry::Empty => false,
             CellGeometry::Convex(c) => c.contains(p),
-            CellGeometry::Clipped { rings, .. } => {
-                let mut inside = false;
-                for ring in rings {
-                    let n = ring.len();
-                    let mut j = n - 1;
-                    for i in 0..n {
-                        let (a, b) = (ring[i], ring[j]);
-                        if (a.y > p.y) != (b.y > p.y)
-                            && p.x < a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x)
-                        {
-                            inside = !inside;
-                        }
-                        j = i;
-                    }
-                }
-                inside
-            }
+            CellGeometry::Clipped { rings, .. } => even_odd_contains(rings, p),
         }
     }
 
@@ -151,33 +137,64 @@ pub fn power_cells(region: &Region, fleet: &Fleet) -> Vec<CellGeometry> {
         y: rmax.y + margin,
     };
 
+    // A first radius that holds every neighbour a typical cell needs (its
+    // farthest vertex is ~0.6 mean spacings away, so neighbours beyond ~1.2
+    // spacings cannot cut it); the best-first iterator, which costs a heap
+    // operation per neighbour, is only needed when that is not enough.
+    let spacing = ((hi.x - lo.x) * (hi.y - lo.y) / vessels.len() as f64).sqrt();
+    let first_radius = 2.5 * spacing;
+    let mut near: Vec<(f64, usize)> = Vec::new();
+
     (0..vessels.len())
         .map(|i| {
             let p = vessels[i].position;
             let mut cell = ConvexPolygon::rectangle(lo - p, hi - p);
             let w_i = (ln_k_max - ln_k[i]) / (2.0 * beta);
-            for nb in tree.nearest_neighbor_iter(&[p.x, p.y]) {
-                let j = nb.data;
-                if j == i {
-                    continue;
-                }
+            // Clips by vessel j; false once the cell is empty.
+            let cut = |cell: &mut ConvexPolygon, j: usize| -> bool {
                 let d = vessels[j].position - p;
                 let d2 = norm2(d);
-                let r2 = cell.max_distance2(Point { x: 0.0, y: 0.0 });
-                let r = r2.sqrt();
-                if d2.sqrt() >= r + (r2 + 2.0 * w_i).sqrt() {
-                    break;
-                }
                 if d2 == 0.0 {
                     if ln_k[j] > ln_k[i] || (ln_k[j] == ln_k[i] && j < i) {
                         cell.vertices.clear();
+                    }
+                } else {
+                    cell.clip(d, 0.5 * d2 - (ln_k[j] - ln_k[i]) / (2.0 * beta));
+                }
+                !cell.is_empty()
+            };
+            // Whether no vessel at distance ≥ `dist` can cut the cell any more.
+            let settled = |cell: &ConvexPolygon, dist: f64| {
+                let r2 = cell.max_distance2(Point { x: 0.0, y: 0.0 });
+                dist >= r2.sqrt() + (r2 + 2.0 * w_i).sqrt()
+            };
+
+            near.clear();
+            near.extend(
+                tree.locate_within_distance([p.x, p.y], first_radius * first_radius)
+                    .filter(|nb| nb.data != i)
+                    .map(|nb| (norm2(vessels[nb.data].position - p), nb.data)),
+            );
+            near.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            let mut alive = true;
+            for &(d2, j) in &near {
+                if settled(&cell, d2.sqrt()) {
+                    break;
+                }
+                alive = cut(&mut cell, j);
+                if !alive {
+                    break;
+                }
+            }
+            if alive && !settled(&cell, first_radius) {
+                for (nb, d2) in tree.nearest_neighbor_iter_with_distance_2(&[p.x, p.y]) {
+                    let j = nb.data;
+                    if j == i || d2 <= first_radius * first_radius {
+                        continue; // itself, or already applied
+                    }
+                    if settled(&cell, d2.sqrt()) || !cut(&mut cell, j) {
                         break;
                     }
-                    continue;
-                }
-                cell.clip(d, 0.5 * d2 - (ln_k[j] - ln_k[i]) / (2.0 * beta));
-                if cell.is_empty() {
-                    break;
                 }
             }
             if cell.is_empty() {
@@ -219,13 +236,7 @@ fn clip_to_region(mut cell: ConvexPolygon, region: &Region) -> CellGeometry {
     }
     let (lo, hi) = (min, max);
     let overlaps = |ring: &[Point]| {
-        let (mut a, mut b) = (ring[0], ring[0]);
-        for v in ring {
-            a.x = a.x.min(v.x);
-            a.y = a.y.min(v.y);
-            b.x = b.x.max(v.x);
-            b.y = b.y.max(v.y);
-        }
+        let (a, b) = bounds(ring);
         a.x <= hi.x && b.x >= lo.x && a.y <= hi.y && b.y >= lo.y
     };
     let rings: Vec<Vec<Point>> = std::iter::once(region.shell())

@@ -36,9 +36,16 @@ impl ConvexPolygon {
     /// Vertices within a relative `1e-12` of the line count as on it, so a plane
     /// through an existing vertex does not create a sliver vertex next to it.
     pub fn clip(&mut self, normal: Point, offset: f64) {
-        self.vertices = clip_ring(&self.vertices, normal, offset);
-        if ring_signed_area(&self.vertices) <= 0.0 {
-            self.vertices.clear();
+        let mut out = Vec::new();
+        match clip_ring_into(&self.vertices, normal, offset, &mut out) {
+            Clipped::Unchanged => {}
+            Clipped::Empty => self.vertices.clear(),
+            Clipped::Cut => {
+                self.vertices = out;
+                if ring_signed_area(&self.vertices) <= 0.0 {
+                    self.vertices.clear();
+                }
+            }
         }
     }
 
@@ -126,21 +133,7 @@ impl ConvexPolygon {
 
     /// Axis-aligned bounds (min, max); meaningless for an empty polygon.
     pub fn bounds(&self) -> (Point, Point) {
-        let mut min = Point {
-            x: f64::INFINITY,
-            y: f64::INFINITY,
-        };
-        let mut max = Point {
-            x: f64::NEG_INFINITY,
-            y: f64::NEG_INFINITY,
-        };
-        for v in &self.vertices {
-            min.x = min.x.min(v.x);
-            min.y = min.y.min(v.y);
-            max.x = max.x.max(v.x);
-            max.y = max.y.max(v.y);
-        }
-        (min, max)
+        super::bounds(&self.vertices)
     }
 
     /// The vertex average: a point strictly inside a non-empty convex polygon.
@@ -167,27 +160,50 @@ impl ConvexPolygon {
 /// through an existing vertex does not create a sliver vertex next to it.
 /// Returns an empty ring when nothing is left.
 pub fn clip_ring(ring: &[Point], normal: Point, offset: f64) -> Vec<Point> {
-    if ring.is_empty() {
-        return Vec::new();
+    let mut out = Vec::new();
+    match clip_ring_into(ring, normal, offset, &mut out) {
+        Clipped::Unchanged => ring.to_vec(),
+        Clipped::Empty => Vec::new(),
+        Clipped::Cut => out,
     }
-    let scale = ring
-        .iter()
-        .map(|v| dot(normal, *v).abs())
-        .fold(offset.abs(), f64::max);
+}
+
+/// What [`clip_ring_into`] did.
+enum Clipped {
+    /// The ring is inside the half-plane; `out` is untouched.
+    Unchanged,
+    /// Nothing is left.
+    Empty,
+    /// `out` holds the clipped ring.
+    Cut,
+}
+
+/// [`clip_ring`] without allocating when the plane misses the ring, which is
+/// the common case when a cell is clipped by far neighbours.
+fn clip_ring_into(ring: &[Point], normal: Point, offset: f64, out: &mut Vec<Point>) -> Clipped {
+    let (mut lo, mut hi, mut scale) = (f64::INFINITY, f64::NEG_INFINITY, offset.abs());
+    for v in ring {
+        let d = dot(normal, *v);
+        scale = scale.max(d.abs());
+        lo = lo.min(d - offset);
+        hi = hi.max(d - offset);
+    }
     let eps = 1e-12 * scale.max(f64::MIN_POSITIVE);
-    let side: Vec<f64> = ring.iter().map(|v| dot(normal, *v) - offset).collect();
-    if side.iter().all(|s| *s <= eps) {
-        return ring.to_vec();
+    if ring.is_empty() || hi <= eps {
+        return Clipped::Unchanged;
     }
-    if side.iter().all(|s| *s >= -eps) {
-        return Vec::new();
+    if lo >= -eps {
+        return Clipped::Empty;
     }
+    let side = |v: &Point| dot(normal, *v) - offset;
     let n = ring.len();
-    let mut out = Vec::with_capacity(n + 2);
+    out.clear();
+    out.reserve(n + 2);
+    let mut sa = side(&ring[0]);
     for i in 0..n {
         let j = (i + 1) % n;
         let (a, b) = (ring[i], ring[j]);
-        let (sa, sb) = (side[i], side[j]);
+        let sb = side(&b);
         if sa <= eps {
             out.push(a);
         }
@@ -195,8 +211,14 @@ pub fn clip_ring(ring: &[Point], normal: Point, offset: f64) -> Vec<Point> {
             let t = sa / (sa - sb);
             out.push(a + (b - a) * t);
         }
+        sa = sb;
     }
-    if out.len() < 3 { Vec::new() } else { out }
+    if out.len() < 3 {
+        out.clear();
+        Clipped::Empty
+    } else {
+        Clipped::Cut
+    }
 }
 
 #[cfg(test)]

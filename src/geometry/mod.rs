@@ -42,14 +42,7 @@ pub fn norm2(a: Point) -> f64 {
 
 /// Squared distance from `p` to the segment `a`–`b`.
 pub fn segment_distance2(p: Point, a: Point, b: Point) -> f64 {
-    let ab = b - a;
-    let len2 = norm2(ab);
-    let t = if len2 > 0.0 {
-        (dot(p - a, ab) / len2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    norm2(p - (a + ab * t))
+    norm2(p - segment_closest(p, a, b))
 }
 
 /// Closest point to `p` on the segment `a`–`b`.
@@ -78,4 +71,77 @@ pub fn ring_signed_area(ring: &[Point]) -> f64 {
         twice += cross(ring[i] - o, ring[i + 1] - o);
     }
     0.5 * twice
+}
+
+/// Axis-aligned bounds (min, max) of `points`; (+∞, −∞) when there are none.
+pub fn bounds<'a>(points: impl IntoIterator<Item = &'a Point>) -> (Point, Point) {
+    let mut min = Point {
+        x: f64::INFINITY,
+        y: f64::INFINITY,
+    };
+    let mut max = Point {
+        x: f64::NEG_INFINITY,
+        y: f64::NEG_INFINITY,
+    };
+    for v in points {
+        min.x = min.x.min(v.x);
+        min.y = min.y.min(v.y);
+        max.x = max.x.max(v.x);
+        max.y = max.y.max(v.y);
+    }
+    (min, max)
+}
+
+/// Where a point lies with respect to a polygon given as rings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RingDistances {
+    /// Inside by the even–odd rule over all rings (so holes are outside).
+    pub inside: bool,
+    /// Squared distance to the nearest edge.
+    pub boundary2: f64,
+    /// Squared distance to the farthest vertex.
+    pub farthest2: f64,
+}
+
+/// [`RingDistances`] of `p`, in one pass over the edges.
+pub fn ring_distances<R: AsRef<[Point]>>(rings: &[R], p: Point) -> RingDistances {
+    let mut out = RingDistances {
+        inside: false,
+        boundary2: f64::INFINITY,
+        farthest2: 0.0,
+    };
+    for ring in rings {
+        let ring = ring.as_ref();
+        let Some(&last) = ring.last() else { continue };
+        let mut b = last;
+        for &a in ring {
+            out.farthest2 = out.farthest2.max(norm2(a - p));
+            out.boundary2 = out.boundary2.min(segment_distance2(p, a, b));
+            out.inside ^= crosses(a, b, p);
+            b = a;
+        }
+    }
+    out
+}
+
+/// Even–odd containment over all rings (so holes count as outside); points on
+/// the boundary may go either way.
+pub fn even_odd_contains<R: AsRef<[Point]>>(rings: &[R], p: Point) -> bool {
+    let mut inside = false;
+    for ring in rings {
+        let ring = ring.as_ref();
+        let Some(&last) = ring.last() else { continue };
+        let mut b = last;
+        for &a in ring {
+            inside ^= crosses(a, b, p);
+            b = a;
+        }
+    }
+    inside
+}
+
+/// Whether the edge a–b crosses the horizontal ray from `p` towards +x.
+#[inline]
+fn crosses(a: Point, b: Point, p: Point) -> bool {
+    (a.y > p.y) != (b.y > p.y) && p.x < a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x)
 }

@@ -19,7 +19,7 @@ use geo::{Intersects, Line, LineString, Polygon};
 use rstar::primitives::{GeomWithData, Line as RLine};
 use rstar::{AABB, RTree};
 
-use super::{Point, dot, norm2, ring_signed_area, segment_closest};
+use super::{Point, bounds, dot, even_odd_contains, norm2, ring_signed_area, segment_closest};
 
 /// Largest absolute coordinate accepted, in metres (10 000 km): far beyond any
 /// mission, small enough that squared distances never overflow.
@@ -144,13 +144,7 @@ impl Region {
 
         let area =
             ring_signed_area(&shell) + holes.iter().map(|h| ring_signed_area(h)).sum::<f64>();
-        let (mut min, mut max) = (shell[0], shell[0]);
-        for v in &shell {
-            min.x = min.x.min(v.x);
-            min.y = min.y.min(v.y);
-            max.x = max.x.max(v.x);
-            max.y = max.y.max(v.y);
-        }
+        let (min, max) = bounds(&shell);
         let convex = holes.is_empty() && is_convex_ccw(&shell);
         let polygon = Polygon::new(
             LineString::from(shell.clone()),
@@ -286,13 +280,7 @@ fn clean_ring(ring: Vec<Point>, role: RingRole) -> Result<Vec<Point>, RegionErro
 /// Rejects a ring whose area is negligible against its extent (collinear
 /// points, or a sliver no vessel could cover).
 fn check_area(ring: &[Point], role: RingRole) -> Result<(), RegionError> {
-    let (mut min, mut max) = (ring[0], ring[0]);
-    for v in ring {
-        min.x = min.x.min(v.x);
-        min.y = min.y.min(v.y);
-        max.x = max.x.max(v.x);
-        max.y = max.y.max(v.y);
-    }
+    let (min, max) = bounds(ring);
     let diag2 = (max.x - min.x).powi(2) + (max.y - min.y).powi(2);
     if ring_signed_area(ring).abs() <= 1e-12 * diag2 {
         return Err(RegionError::Degenerate(role));
@@ -364,20 +352,7 @@ impl EnvelopeOf for Segment {
 
 /// Even–odd point-in-ring test (the boundary case is handled by the caller).
 fn point_in_ring(p: Point, ring: &[Point]) -> bool {
-    let mut inside = false;
-    let n = ring.len();
-    let mut j = n - 1;
-    for i in 0..n {
-        let (a, b) = (ring[i], ring[j]);
-        if (a.y > p.y) != (b.y > p.y) {
-            let x = a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x);
-            if p.x < x {
-                inside = !inside;
-            }
-        }
-        j = i;
-    }
-    inside
+    even_odd_contains(&[ring], p)
 }
 
 fn is_convex_ccw(ring: &[Point]) -> bool {
