@@ -80,8 +80,8 @@ fn cell_figures(
 ) -> CellResult {
     let p = vessel.position;
     let zero = Point { x: 0.0, y: 0.0 };
-    let pieces = local_pieces(&geometry, p);
-    if pieces.is_empty() {
+    let rings = local_rings(&geometry, p);
+    if rings.is_empty() {
         return CellResult {
             mass: 0.0,
             centroid: region.closest_point(p),
@@ -91,7 +91,7 @@ fn cell_figures(
         };
     }
     let area = geometry.area();
-    let (min, max) = world_bounds(&pieces, p);
+    let (min, max) = world_bounds(&rings, p);
 
     let ln_k = vessel.k.ln();
     let mut terms = Vec::new();
@@ -124,7 +124,7 @@ fn cell_figures(
             center: zero,
         });
     }
-    let r = integrate(&pieces, &terms, tol);
+    let r = integrate(&rings, &terms, tol);
     if !(r.mass > 0.0 && r.mass.is_finite()) {
         return CellResult {
             mass: 0.0,
@@ -146,20 +146,19 @@ fn cell_figures(
     }
 }
 
-/// The cell's rings relative to `p`: exteriors counter-clockwise and holes
-/// clockwise (for a clipped cell, the exact oriented chain), as [`integrate`]
-/// needs them.
-fn local_pieces(geometry: &CellGeometry, p: Point) -> Vec<Vec<Vec<Point>>> {
+/// The cell's oriented rings relative to `p` (for a clipped cell, the exact
+/// chain), as [`integrate`] needs them.
+fn local_rings(geometry: &CellGeometry, p: Point) -> Vec<Vec<Point>> {
     let shift = |ring: &[Point]| ring.iter().map(|v| *v - p).collect::<Vec<_>>();
     match geometry {
         CellGeometry::Empty => Vec::new(),
-        CellGeometry::Convex(c) => vec![vec![shift(&c.vertices)]],
-        CellGeometry::Clipped { rings, .. } => vec![rings.iter().map(|r| shift(r)).collect()],
+        CellGeometry::Convex(c) => vec![shift(&c.vertices)],
+        CellGeometry::Clipped { rings, .. } => rings.iter().map(|r| shift(r)).collect(),
     }
 }
 
 /// World-coordinate bounds of local rings.
-fn world_bounds(pieces: &[Vec<Vec<Point>>], p: Point) -> (Point, Point) {
-    let (min, max) = bounds(pieces.iter().flatten().flatten());
+fn world_bounds(rings: &[Vec<Point>], p: Point) -> (Point, Point) {
+    let (min, max) = bounds(rings.iter().flatten());
     (min + p, max + p)
 }

@@ -139,20 +139,19 @@ impl Ord for Piece {
     }
 }
 
-/// A cell as polygons ("pieces"), each a list of rings: the exterior first,
-/// then holes; interior on the left of every directed edge (exterior
-/// counter-clockwise, holes clockwise). Coordinates relative to the vessel.
-pub type Pieces = [Vec<Vec<Point>>];
-
-/// Integrates Σ_t exp(λ_t − a_t ‖x − m_t‖²) and its first moment over the cell.
-pub fn integrate(pieces: &Pieces, terms: &[Gaussian], tol: Tolerance) -> Scaled {
+/// Integrates Σ_t exp(λ_t − a_t ‖x − m_t‖²) and its first moment over the cell
+/// bounded by `rings`: any number of rings with the interior on the left of
+/// every directed edge (outer boundaries counter-clockwise, holes clockwise),
+/// an oriented chain such as [`CellGeometry::Clipped`](super::CellGeometry)
+/// holds. Coordinates relative to the vessel.
+pub fn integrate(rings: &[Vec<Point>], terms: &[Gaussian], tol: Tolerance) -> Scaled {
     let empty = Scaled {
         mass: 0.0,
         moment: Point { x: 0.0, y: 0.0 },
         log_scale: 0.0,
         triangles: 0,
     };
-    let rings: Vec<&Vec<Point>> = pieces.iter().flatten().filter(|r| r.len() >= 3).collect();
+    let rings: Vec<&Vec<Point>> = rings.iter().filter(|r| r.len() >= 3).collect();
     if rings.is_empty() || terms.is_empty() {
         return empty;
     }
@@ -359,8 +358,8 @@ mod tests {
         Point { x, y }
     }
 
-    fn rect(x0: f64, y0: f64, x1: f64, y1: f64) -> Vec<Vec<Vec<Point>>> {
-        vec![vec![vec![p(x0, y0), p(x1, y0), p(x1, y1), p(x0, y1)]]]
+    fn rect(x0: f64, y0: f64, x1: f64, y1: f64) -> Vec<Vec<Point>> {
+        vec![vec![p(x0, y0), p(x1, y0), p(x1, y1), p(x0, y1)]]
     }
 
     const MODES: [Tolerance; 2] = [
@@ -501,7 +500,7 @@ mod tests {
 
     #[test]
     fn constant_integrand_gives_area_and_area_centroid() {
-        let tri = vec![vec![vec![p(0.0, 0.0), p(4.0, 0.0), p(0.0, 3.0)]]];
+        let tri = vec![vec![p(0.0, 0.0), p(4.0, 0.0), p(0.0, 3.0)]];
         let t = Gaussian {
             log_weight: 0.0,
             a: 1e-12,
@@ -519,13 +518,10 @@ mod tests {
     #[test]
     fn holes_are_subtracted_by_both_methods() {
         // 10×10 square with a clockwise 2×2 hole; integrand ~ 1.
-        let cell = vec![vec![
+        let cell = vec![
             vec![p(0.0, 0.0), p(10.0, 0.0), p(10.0, 10.0), p(0.0, 10.0)],
-            vec![p(6.0, 6.0), p(8.0, 6.0), p(8.0, 8.0), p(6.0, 8.0)]
-                .into_iter()
-                .rev()
-                .collect(),
-        ]];
+            vec![p(6.0, 6.0), p(6.0, 8.0), p(8.0, 8.0), p(8.0, 6.0)],
+        ];
         let t = Gaussian {
             log_weight: 0.0,
             a: 1e-12,

@@ -13,8 +13,6 @@
 
 use nalgebra::{DMatrix, SymmetricEigen};
 
-use super::Point;
-
 /// A quadrature rule on the reference triangle (0,0), (1,0), (0,1).
 ///
 /// Weights sum to 1 (they are fractions of the triangle's area), so for a
@@ -59,13 +57,6 @@ impl TriangleRule {
     /// Whether the rule has no points (never true for a constructed rule).
     pub fn is_empty(&self) -> bool {
         self.nodes.is_empty()
-    }
-
-    /// Maps the reference node `k` into the triangle `a`, `b`, `c`.
-    #[inline]
-    pub fn point(&self, k: usize, a: Point, b: Point, c: Point) -> Point {
-        let (u, v) = self.nodes[k];
-        a + (b - a) * u + (c - a) * v
     }
 }
 
