@@ -9,6 +9,7 @@
 //! - [`scenario`]: the shell that turns a scenario document into validated core
 //!   types and an evaluation back into its document.
 
+pub mod control;
 pub mod coverage;
 pub mod geometry;
 pub mod protocol;
