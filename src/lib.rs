@@ -14,3 +14,4 @@ pub mod coverage;
 pub mod geometry;
 pub mod protocol;
 pub mod scenario;
+pub mod sim;

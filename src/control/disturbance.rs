@@ -6,7 +6,7 @@
 //! turning at most at `r_max`, which is what the observer's gain b₂ must exceed
 //! (paper Assumption 2).
 
-use rand::{Rng, SeedableRng};
+use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use super::Vec3;

@@ -20,13 +20,22 @@
 //! - desired ground velocity w_d = S(E) ê with the paper's speed profile
 //!   S(E) = k_u1 (σ(b₂ E) − ½) + k_u2 E, capped at `max_speed`, and 0 inside
 //!   `arrival_radius`;
-//! - the bow is steered along the velocity error Δw = w_d − w (or against it,
-//!   whichever is nearer, so braking may use astern thrust), with the paper's
-//!   r_d law on that heading error; when |Δw| is tiny it follows w_d, and
-//!   when both are tiny it holds its heading;
+//! - the bow is steered along Δw + ¼ w_d, i.e. mostly along the velocity
+//!   error Δw = w_d − w and along w_d once that error is small (or against
+//!   it, with hysteresis, so braking may use astern thrust), with the paper's
+//!   r_d law on that heading error, faded out below a needed velocity change
+//!   of 0.1 m/s so that at rest at the goal it holds its heading, and capped
+//!   at `max_yaw_rate`;
 //! - u_d = w_d · b, the desired velocity's component along the current bow
-//!   b: thrust never works against the goal, it slows by itself while the bow
-//!   is still turning, and it brakes through zero when w_d is behind.
+//!   b (braking through zero when w_d is behind), with u̇_d = r_d (w_d · l),
+//!   l the beam direction — how that component changes while the bow turns;
+//!   vessels extrapolate u_d with it between ticks;
+//! - but only as far as the bow points the right way: with
+//!   α = max(cos ψ_e, 0)², u_d = α w_d·b + (1 − α) u and u̇_d blends to the
+//!   natural rate v r_d, i.e. the surge coasts while the bow comes round.
+//!   Holding u at a set value while the hull yaws takes a force m r (w·l);
+//!   with the paper's vessel that is all its thrust, spent as the centripetal
+//!   force of an orbit around the goal that keeps the heading error fixed.
 //!
 //! Once the bow lies along Δw, changing u changes w exactly along Δw, so the
 //! error shrinks without ever needing the weakly damped sway to die out.
@@ -73,6 +82,10 @@ pub struct GuidanceGains {
     pub arrival_radius: f64,
     /// Speed cap of the `course` mode [m/s].
     pub max_speed: f64,
+    /// Yaw-rate cap of the `course` mode [rad/s]: the outer loop must ask
+    /// only for turns the actuator can follow (the paper's vessel reaches
+    /// 1 rad/s² at most), or the yaw loop lags, overshoots and spins.
+    pub max_yaw_rate: f64,
     /// Time constant of the filters on ψ̇_r, Ċ, u̇_d, ṙ_d [s].
     pub filter_time: f64,
 }
@@ -89,6 +102,7 @@ impl Default for GuidanceGains {
             b2: 1.0,
             arrival_radius: 0.05,
             max_speed: 2.0,
+            max_yaw_rate: 1.0,
             filter_time: 0.5,
         }
     }
@@ -125,7 +139,13 @@ pub struct Guidance {
     c_dot: (f64, f64),
     u_d_dot: f64,
     r_d_dot: f64,
+    /// Whether the `course` mode is thrusting astern.
+    astern: bool,
 }
+
+/// The `course` mode switches between ahead and astern when the heading
+/// error of the current choice exceeds this (a right angle plus hysteresis).
+const ASTERN_SWITCH: f64 = 1.9;
 
 impl Guidance {
     pub fn new(gains: GuidanceGains) -> Self {
@@ -136,6 +156,7 @@ impl Guidance {
             c_dot: (0.0, 0.0),
             u_d_dot: 0.0,
             r_d_dot: 0.0,
+            astern: false,
         }
     }
 
@@ -164,14 +185,15 @@ impl Guidance {
 
         let speed = |e: f64| g.k_u1 * (sigmoid(g.b2 * e) - 0.5) + g.k_u2 * e;
         let yaw = |err: f64| g.k_r1 * (sigmoid(g.b1 * err) - 0.5) + g.k_r2 * err;
-        let (u_d, r_d, psi_e) = match g.mode {
+        // (u_d, r_d, ψ_e, exact u̇_d when the law has one)
+        let (u_d, r_d, psi_e, exact_u_d_dot) = match g.mode {
             GuidanceMode::Paper => {
                 let psi_e = wrap(psi_r - state.psi);
                 if e < g.arrival_radius {
-                    (0.0, 0.0, psi_e)
+                    (0.0, 0.0, psi_e, None)
                 } else {
                     let c_dot = self.c_dot.0.hypot(self.c_dot.1);
-                    (speed(e) + c_dot, yaw(psi_e) + self.psi_r_dot, psi_e)
+                    (speed(e) + c_dot, yaw(psi_e) + self.psi_r_dot, psi_e, None)
                 }
             }
             GuidanceMode::Course => {
@@ -187,26 +209,42 @@ impl Guidance {
                 };
                 let w = state.ground_velocity();
                 let dw = (wd.0 - w.0, wd.1 - w.1);
-                const SMALL: f64 = 0.02; // m/s
-                let target = if dw.0.hypot(dw.1) > SMALL {
-                    Some(dw)
-                } else if s > SMALL {
-                    Some(wd)
-                } else {
-                    None
-                };
+                const FADE: f64 = 0.1; // m/s
                 let (bow_x, bow_y) = (state.psi.cos(), state.psi.sin());
                 let u_d = wd.0 * bow_x + wd.1 * bow_y;
-                match target {
-                    None => (u_d, 0.0, 0.0),
-                    Some((tx, ty)) => {
-                        let mut psi_e = wrap(ty.atan2(tx) - state.psi);
-                        // Thrust astern rather than turn more than a right angle.
-                        if psi_e.abs() > std::f64::consts::FRAC_PI_2 {
-                            psi_e = wrap(psi_e + std::f64::consts::PI);
-                        }
-                        (u_d, yaw(psi_e), psi_e)
+                // Steer along Δw, blended with w_d so that the target turns
+                // continuously as Δw vanishes.
+                let target = (dw.0 + 0.25 * wd.0, dw.1 + 0.25 * wd.1);
+                let need = target.0.hypot(target.1);
+                let beam = wd.1 * bow_x - wd.0 * bow_y;
+                if need == 0.0 {
+                    (u_d, 0.0, 0.0, Some(0.0))
+                } else {
+                    let ahead = wrap(target.1.atan2(target.0) - state.psi);
+                    // Thrust astern rather than turn more than a right angle,
+                    // with hysteresis so the choice does not flicker.
+                    let flip = |a: f64| wrap(a + std::f64::consts::PI);
+                    let current = if self.astern { flip(ahead) } else { ahead };
+                    if current.abs() > ASTERN_SWITCH {
+                        self.astern = !self.astern;
                     }
+                    let psi_e = if self.astern { flip(ahead) } else { ahead };
+                    // Turning matters as much as the velocity change it
+                    // serves: fade the yaw command out as that change
+                    // vanishes, rather than switching it off.
+                    let r_d = (yaw(psi_e) * (need / FADE).min(1.0))
+                        .clamp(-g.max_yaw_rate, g.max_yaw_rate);
+                    // Track only as far as the bow points the right way; else
+                    // coast (u_d = u at its natural rate v r), so no thrust
+                    // turns the velocity along with the hull.
+                    let alpha = psi_e.cos().max(0.0).powi(2);
+                    let (u, v) = (state.vel.x, state.vel.y);
+                    (
+                        alpha * u_d + (1.0 - alpha) * u,
+                        r_d,
+                        psi_e,
+                        Some(alpha * r_d * beam + (1.0 - alpha) * v * r_d),
+                    )
                 }
             }
         };
@@ -229,8 +267,12 @@ impl Guidance {
         Command {
             u_d,
             r_d,
-            u_d_dot: self.u_d_dot,
-            r_d_dot: self.r_d_dot,
+            u_d_dot: exact_u_d_dot.unwrap_or(self.u_d_dot),
+            r_d_dot: if exact_u_d_dot.is_some() {
+                0.0
+            } else {
+                self.r_d_dot
+            },
             e,
             psi_e,
         }

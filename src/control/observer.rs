@@ -60,8 +60,10 @@ pub struct Observer {
     v_bar: Vec3,
     /// τ̄_d.
     estimate: Vec3,
-    /// Measurement and input of the previous step.
-    last: Option<(Vec3, Vec3)>,
+    /// The previous measurement.
+    last_v: Option<Vec3>,
+    /// The input acting since then.
+    input: Vec3,
 }
 
 impl Observer {
@@ -71,7 +73,8 @@ impl Observer {
             params,
             v_bar: Vec3::zeros(),
             estimate: Vec3::zeros(),
-            last: None,
+            last_v: None,
+            input: Vec3::zeros(),
         }
     }
 
@@ -80,15 +83,19 @@ impl Observer {
         self.estimate
     }
 
-    /// Feeds the velocity measured now, `h` after the previous call, and the
-    /// input τ = (τ_u, 0, τ_r) that will act from now on.
-    pub fn update(&mut self, v: Vec3, tau: Vec3, h: f64) {
-        let Some((v_prev, tau_prev)) = self.last.replace((v, tau)) else {
+    /// Feeds the velocity measured now, `h` after the previous measurement:
+    /// integrates the observer over that interval with the input recorded by
+    /// [`actuate`](Self::actuate).
+    pub fn measure(&mut self, v: Vec3, h: f64) {
+        let Some(v_prev) = self.last_v.replace(v) else {
             self.v_bar = v;
             return;
         };
         let m = self.params.mass();
-        let drive = self.params.n(v_prev) + tau_prev;
+        // Trapezoidal drift: both ends are measured, and the explicit N(V_prev)
+        // would leave an O(h |dN/dt|) error that the observer reads as a
+        // disturbance during hard manoeuvres.
+        let drive = (self.params.n(v_prev) + self.params.n(v)) * 0.5 + self.input;
         let (b1, b2) = (self.gains.b1, self.gains.b2);
         for c in 0..3 {
             // Ω⁺ without the sliding terms.
@@ -105,6 +112,12 @@ impl Observer {
             // V̄⁺ from Ω⁺ = M (V̄⁺ − V⁺).
             self.v_bar[c] = v[c] + omega / m[c];
         }
+    }
+
+    /// Records the input τ = (τ_u, 0, τ_r) that acts from now until the next
+    /// measurement (after saturation: what the hull really gets).
+    pub fn actuate(&mut self, tau: Vec3) {
+        self.input = tau;
     }
 }
 
@@ -129,7 +142,8 @@ mod tests {
             let t = k as f64 * h;
             // A manoeuvring vessel: surge, and a slow turn.
             let tau = Vec3::new(200.0 * (0.3 * t).sin(), 0.0, 50.0 * (0.2 * t).cos());
-            obs.update(s.vel, tau, h);
+            obs.measure(s.vel, h);
+            obs.actuate(tau);
             let err = obs.estimate() - dist.value(t, s.psi);
             if t >= after {
                 worst = worst.max(err.amax());

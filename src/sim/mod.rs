@@ -1,0 +1,393 @@
+//! `seacover sim`: the whole closed loop in one process, no network,
+//! deterministic for a seed (SPEC §1, issue 3).
+//!
+//! Dynamics, observer and controller run at the dynamics step (1 kHz by
+//! default); the coverage engine and guidance run at the coordinator's tick
+//! (10 Hz), exactly as the networked system splits them: commands are held
+//! between ticks. Lloyd's single-integrator fleet (paper Fig. 3b) runs from
+//! the same start on the same ticks.
+//!
+//! This module is the shell around the pure core: it owns files (CSV, JSON,
+//! figures) and the progress bar; the loop itself is [`run`], which is pure.
+
+pub mod figures;
+pub mod output;
+
+use crate::control::controller::{ControllerGains, Reference, control};
+use crate::control::disturbance::{Disturbance, Gusts};
+use crate::control::guidance::{Command, Guidance, GuidanceGains};
+use crate::control::model::{State, VesselParams, step};
+use crate::control::observer::{Observer, ObserverGains};
+use crate::control::{Vec3, lloyd};
+use crate::coverage::{CellGeometry, Fleet, Options, Vessel, evaluate};
+use crate::geometry::Point;
+use crate::scenario::Scenario;
+
+/// Which disturbance acts on the fleet.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DisturbanceKind {
+    /// The paper's sinusoids, τ_d = (sin(t+i), 1.5 cos(t+i), 2 sin(t+i)).
+    Paper,
+    /// Seeded random gusts (|τ_d| ≤ (20, 10, 5), |τ̇_d| ≤ 2.5 per channel).
+    Gusts,
+    /// A steady 15 N push towards +x (a current), plus the paper's sinusoids.
+    Current,
+    None,
+}
+
+impl DisturbanceKind {
+    pub fn parse(s: &str) -> Option<Self> {
+        match s {
+            "paper" => Some(Self::Paper),
+            "gusts" => Some(Self::Gusts),
+            "current" => Some(Self::Current),
+            "none" => Some(Self::None),
+            _ => None,
+        }
+    }
+
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Paper => "paper",
+            Self::Gusts => "gusts",
+            Self::Current => "current",
+            Self::None => "none",
+        }
+    }
+
+    /// The model for vessel `i` (0-based).
+    fn model(&self, i: usize, seed: u64) -> Disturbance {
+        match self {
+            Self::Paper => Disturbance::Paper { index: i + 1 },
+            Self::Gusts => Disturbance::Gusts(Gusts::random(
+                seed.wrapping_mul(1000).wrapping_add(i as u64),
+                Vec3::new(20.0, 10.0, 5.0),
+                Vec3::new(2.5, 2.5, 2.5),
+            )),
+            Self::Current => Disturbance::Sum(vec![
+                Disturbance::Current { fx: 15.0, fy: 0.0 },
+                Disturbance::Paper { index: i + 1 },
+            ]),
+            Self::None => Disturbance::None,
+        }
+    }
+}
+
+/// Everything a run depends on.
+#[derive(Debug, Clone)]
+pub struct Config {
+    pub scenario: Scenario,
+    /// Initial headings (the scenario's ψ, 0 where absent).
+    pub headings: Vec<f64>,
+    pub duration: f64,
+    /// Dynamics step [s].
+    pub step: f64,
+    /// Coverage and guidance rate [Hz].
+    pub tick_hz: f64,
+    pub guidance: GuidanceGains,
+    pub preset: String,
+    pub vessel: VesselParams,
+    pub observer: ObserverGains,
+    pub controller: ControllerGains,
+    pub disturbance: DisturbanceKind,
+    pub seed: u64,
+    /// Gain k of Lloyd's ṗ = k (C − p) [1/s].
+    pub lloyd_gain: f64,
+    /// Times at which to keep the partition for the evolution figure.
+    pub snapshots: Vec<f64>,
+}
+
+/// One vessel at one tick.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VesselSample {
+    pub state: State,
+    pub command: Command,
+    pub centroid: Point,
+    pub tau_d: Vec3,
+    pub estimate: Vec3,
+}
+
+/// The fleet at one tick.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Tick {
+    pub t: f64,
+    pub h: f64,
+    pub lloyd_h: f64,
+    pub vessels: Vec<VesselSample>,
+    pub lloyd_positions: Vec<Point>,
+}
+
+/// The partition kept at a snapshot time.
+#[derive(Debug, Clone)]
+pub struct Snapshot {
+    pub t: f64,
+    pub cells: Vec<CellGeometry>,
+}
+
+/// Figures measured over the whole run at the dynamics step.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Measures {
+    pub observer_error_max_after_10s: f64,
+    pub u_error_max_after_20s: f64,
+    pub r_error_max_after_20s: f64,
+    /// Last time any observer error exceeded 0.05.
+    pub t1_observer: f64,
+}
+
+/// A finished run.
+#[derive(Debug, Clone)]
+pub struct Run {
+    pub ticks: Vec<Tick>,
+    pub snapshots: Vec<Snapshot>,
+    pub measures: Measures,
+}
+
+/// Why a run failed.
+#[derive(Debug, thiserror::Error)]
+pub enum SimError {
+    #[error("vessel {vessel} left the representable range at t = {t:.1} s")]
+    Diverged { vessel: usize, t: f64 },
+    #[error(transparent)]
+    Scenario(#[from] crate::scenario::ScenarioError),
+    #[error("{0}")]
+    Io(String),
+    #[error("drawing {0}")]
+    Figure(String),
+}
+
+/// The paper's scenario (paper section 5), built in.
+pub const PAPER_SCENARIO: &str = include_str!("../../examples/paper.json");
+
+/// Loads `paper` (built in) or a scenario file; returns it with the vessels'
+/// initial headings.
+pub fn load_scenario(spec: &str) -> Result<(Scenario, Vec<f64>), SimError> {
+    let text = if spec == "paper" {
+        PAPER_SCENARIO.to_string()
+    } else {
+        std::fs::read_to_string(spec)
+            .map_err(|e| SimError::Io(format!("cannot read {spec}: {e}")))?
+    };
+    let doc = crate::scenario::parse_document(&text)?;
+    let scenario = Scenario::from_document(&doc)?;
+    let headings = doc.vessels.iter().map(|v| v.psi.unwrap_or(0.0)).collect();
+    Ok((scenario, headings))
+}
+
+impl Config {
+    /// A run of `duration` seconds with the defaults: 1 kHz dynamics, 10 Hz
+    /// ticks, the paper's disturbances, snapshots at 0, T/8, T/3 and T.
+    pub fn new(scenario: Scenario, headings: Vec<f64>, duration: f64) -> Config {
+        Config {
+            scenario,
+            headings,
+            duration,
+            step: 1e-3,
+            tick_hz: 10.0,
+            guidance: GuidanceGains::default(),
+            preset: "paper".to_string(),
+            vessel: VesselParams::PAPER,
+            observer: ObserverGains::default(),
+            controller: ControllerGains::default(),
+            disturbance: DisturbanceKind::Paper,
+            seed: 1,
+            lloyd_gain: 0.5,
+            snapshots: vec![0.0, duration / 8.0, duration / 3.0, duration],
+        }
+    }
+}
+
+/// Runs `config` and writes `timeseries.csv`, `summary.json` and (with
+/// `figures`) the four figures into `out`.
+pub fn run_to_dir(
+    config: &Config,
+    out: &std::path::Path,
+    figures: bool,
+    progress: impl FnMut(f64),
+) -> Result<output::Summary, SimError> {
+    let io = |e: std::io::Error| SimError::Io(format!("{}: {e}", out.display()));
+    std::fs::create_dir_all(out).map_err(io)?;
+    let started = std::time::Instant::now();
+    let result = run(config, progress)?;
+    let wall = started.elapsed().as_secs_f64();
+    let summary = output::Summary::new(config, &result, wall);
+    output::write_timeseries(&out.join("timeseries.csv"), config, &result).map_err(io)?;
+    output::write_summary(&out.join("summary.json"), &summary).map_err(io)?;
+    if figures {
+        figures::draw_all(out, config, &result).map_err(SimError::Figure)?;
+    }
+    Ok(summary)
+}
+
+fn fleet_at(config: &Config, positions: impl Iterator<Item = Point>) -> Option<Fleet> {
+    let beta = config.scenario.fleet.beta();
+    let vessels = positions
+        .zip(config.scenario.fleet.vessels())
+        .map(|(position, v)| Vessel {
+            position,
+            k: v.k,
+            beta,
+        })
+        .collect();
+    Fleet::new(vessels).ok()
+}
+
+/// Runs the closed loop. `progress` is called with the fraction done.
+pub fn run(config: &Config, mut progress: impl FnMut(f64)) -> Result<Run, SimError> {
+    let n = config.scenario.fleet.len();
+    let region = &config.scenario.region;
+    let risk = &config.scenario.risk;
+    let options = Options::default();
+    let disturbances: Vec<Disturbance> = (0..n)
+        .map(|i| config.disturbance.model(i, config.seed))
+        .collect();
+    // Paper Assumption 2: b₂ must exceed |τ̇_d|, which for a force fixed in
+    // the earth frame grows with the turn rate the guidance may ask for.
+    let rate = disturbances
+        .iter()
+        .map(|d| d.rate_bound(config.guidance.max_yaw_rate).amax())
+        .fold(0.0, f64::max);
+    let observer_gains = if ObserverGains::for_rate(rate).b2 > config.observer.b2 {
+        ObserverGains::for_rate(rate)
+    } else {
+        config.observer
+    };
+    let mut states: Vec<State> = config
+        .scenario
+        .fleet
+        .vessels()
+        .iter()
+        .zip(&config.headings)
+        .map(|(v, &psi)| State {
+            x: v.position.x,
+            y: v.position.y,
+            psi,
+            vel: Vec3::zeros(),
+        })
+        .collect();
+    let mut observers: Vec<Observer> = (0..n)
+        .map(|_| Observer::new(config.vessel, observer_gains))
+        .collect();
+    let mut guidance: Vec<Guidance> = (0..n).map(|_| Guidance::new(config.guidance)).collect();
+    let mut references = vec![Reference::default(); n];
+    let mut commands = vec![Command::default(); n];
+    let mut lloyd_positions: Vec<Point> = config
+        .scenario
+        .fleet
+        .vessels()
+        .iter()
+        .map(|v| v.position)
+        .collect();
+
+    let h = config.step;
+    let steps = (config.duration / h).round() as usize;
+    let per_tick = ((1.0 / config.tick_hz) / h).round().max(1.0) as usize;
+    let mut ticks = Vec::with_capacity(steps / per_tick + 1);
+    let mut snapshots = Vec::new();
+    let mut pending_snapshots: Vec<f64> = config.snapshots.clone();
+    let mut measures = Measures::default();
+
+    for k in 0..=steps {
+        let t = k as f64 * h;
+        if k % per_tick == 0 {
+            let diverged = states.iter().position(|s| {
+                !(s.x.is_finite() && s.y.is_finite()) || s.x.abs() > 1e6 || s.y.abs() > 1e6
+            });
+            if let Some(vessel) = diverged {
+                return Err(SimError::Diverged { vessel, t });
+            }
+            let fleet = fleet_at(config, states.iter().map(|s| Point { x: s.x, y: s.y }))
+                .ok_or(SimError::Diverged { vessel: 0, t })?;
+            let eval = evaluate(region, risk, &fleet, &options);
+            let lloyd_fleet = fleet_at(config, lloyd_positions.iter().copied())
+                .ok_or(SimError::Diverged { vessel: 0, t })?;
+            let lloyd_eval = evaluate(region, risk, &lloyd_fleet, &options);
+
+            let mut samples = Vec::with_capacity(n);
+            for i in 0..n {
+                let c = eval.cells[i].centroid;
+                commands[i] = guidance[i].update(t, &states[i], (c.x, c.y));
+                references[i] = Reference {
+                    u_d: commands[i].u_d,
+                    r_d: commands[i].r_d,
+                    u_d_dot: commands[i].u_d_dot,
+                    r_d_dot: commands[i].r_d_dot,
+                };
+                samples.push(VesselSample {
+                    state: states[i],
+                    command: commands[i],
+                    centroid: c,
+                    tau_d: disturbances[i].value(t, states[i].psi),
+                    estimate: observers[i].estimate(),
+                });
+            }
+            if let Some(pos) = pending_snapshots.iter().position(|&ts| ts <= t + 1e-9) {
+                pending_snapshots.remove(pos);
+                snapshots.push(Snapshot {
+                    t,
+                    cells: eval.cells.iter().map(|c| c.geometry.clone()).collect(),
+                });
+            }
+            ticks.push(Tick {
+                t,
+                h: eval.h,
+                lloyd_h: lloyd_eval.h,
+                vessels: samples,
+                lloyd_positions: lloyd_positions.clone(),
+            });
+            let centroids: Vec<Point> = lloyd_eval.cells.iter().map(|c| c.centroid).collect();
+            lloyd::step(
+                &mut lloyd_positions,
+                &centroids,
+                config.lloyd_gain,
+                per_tick as f64 * h,
+            );
+            progress(t / config.duration);
+        }
+        if k == steps {
+            break;
+        }
+        for i in 0..n {
+            let s = states[i];
+            observers[i].measure(s.vel, h);
+            let est = observers[i].estimate();
+            let truth = disturbances[i].value(t, s.psi);
+            if t >= 10.0 {
+                measures.observer_error_max_after_10s = measures
+                    .observer_error_max_after_10s
+                    .max((est - truth).amax());
+            }
+            if (est - truth).amax() > 0.05 {
+                measures.t1_observer = t;
+            }
+            // Between ticks the vessel extrapolates the command with its rates,
+            // as an agent does with u_d_dot and r_d_dot.
+            let since = (k % per_tick) as f64 * h;
+            let held = &references[i];
+            let reference = Reference {
+                u_d: held.u_d + held.u_d_dot * since,
+                r_d: held.r_d + held.r_d_dot * since,
+                ..*held
+            };
+            if t >= 20.0 {
+                measures.u_error_max_after_20s = measures
+                    .u_error_max_after_20s
+                    .max((s.vel.x - reference.u_d).abs());
+                measures.r_error_max_after_20s = measures
+                    .r_error_max_after_20s
+                    .max((s.vel.z - reference.r_d).abs());
+            }
+            let (tu, tr) = control(&config.vessel, &config.controller, s.vel, &reference, est);
+            let dist = &disturbances[i];
+            let (next, applied) = step(&config.vessel, &s, tu, tr, t, h, |t, st| {
+                dist.value(t, st.psi)
+            });
+            observers[i].actuate(Vec3::new(applied.0, 0.0, applied.1));
+            states[i] = next;
+        }
+    }
+    Ok(Run {
+        ticks,
+        snapshots,
+        measures,
+    })
+}

@@ -1,0 +1,135 @@
+//! Files a run leaves behind: `timeseries.csv` and `summary.json`.
+
+use std::io::Write;
+use std::path::Path;
+
+use serde::Serialize;
+
+use super::{Config, Run};
+
+/// `summary.json`, with exactly the keys of issue 3.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct Summary {
+    pub guidance: String,
+    pub preset: String,
+    pub duration: f64,
+    pub seed: u64,
+    #[serde(rename = "H_start")]
+    pub h_start: f64,
+    #[serde(rename = "H_end")]
+    pub h_end: f64,
+    #[serde(rename = "E_max_end")]
+    pub e_max_end: f64,
+    pub observer_error_max_after_10s: f64,
+    pub velocity_error_max_after_20s: VelocityErrors,
+    #[serde(rename = "T1_observer_s")]
+    pub t1_observer_s: f64,
+    pub lloyd: LloydSummary,
+    pub wall_seconds: f64,
+}
+
+#[derive(Debug, Clone, Copy, Serialize, PartialEq)]
+pub struct VelocityErrors {
+    pub u: f64,
+    pub r: f64,
+}
+
+#[derive(Debug, Clone, Copy, Serialize, PartialEq)]
+pub struct LloydSummary {
+    #[serde(rename = "H_end")]
+    pub h_end: f64,
+    #[serde(rename = "E_max_end")]
+    pub e_max_end: f64,
+}
+
+impl Summary {
+    pub fn new(config: &Config, run: &Run, wall_seconds: f64) -> Summary {
+        let first = run.ticks.first().expect("a run has a first tick");
+        let last = run.ticks.last().expect("a run has a last tick");
+        let e_max_end = last.vessels.iter().map(|v| v.command.e).fold(0.0, f64::max);
+        // Lloyd's E at the end: distance of each Lloyd vessel to its centroid,
+        // which the last tick's positions and the engine give.
+        let lloyd_e = lloyd_e_max(config, last);
+        Summary {
+            guidance: config.guidance.mode.name().to_string(),
+            preset: config.preset.clone(),
+            duration: config.duration,
+            seed: config.seed,
+            h_start: first.h,
+            h_end: last.h,
+            e_max_end,
+            observer_error_max_after_10s: run.measures.observer_error_max_after_10s,
+            velocity_error_max_after_20s: VelocityErrors {
+                u: run.measures.u_error_max_after_20s,
+                r: run.measures.r_error_max_after_20s,
+            },
+            t1_observer_s: run.measures.t1_observer,
+            lloyd: LloydSummary {
+                h_end: last.lloyd_h,
+                e_max_end: lloyd_e,
+            },
+            wall_seconds,
+        }
+    }
+}
+
+fn lloyd_e_max(config: &Config, tick: &super::Tick) -> f64 {
+    let Some(fleet) = super::fleet_at(config, tick.lloyd_positions.iter().copied()) else {
+        return f64::NAN;
+    };
+    let eval = crate::coverage::evaluate(
+        &config.scenario.region,
+        &config.scenario.risk,
+        &fleet,
+        &crate::coverage::Options::default(),
+    );
+    eval.cells
+        .iter()
+        .zip(&tick.lloyd_positions)
+        .map(|(c, p)| crate::geometry::norm2(c.centroid - *p).sqrt())
+        .fold(0.0, f64::max)
+}
+
+/// Writes `timeseries.csv`: one row per tick and vessel.
+pub fn write_timeseries(path: &Path, config: &Config, run: &Run) -> std::io::Result<()> {
+    let mut w = std::io::BufWriter::new(std::fs::File::create(path)?);
+    writeln!(
+        w,
+        "t,vessel,x,y,psi,u,v,r,u_d,r_d,E,psi_e,tau_ud,tau_vd,tau_rd,tau_ud_hat,tau_vd_hat,tau_rd_hat,H"
+    )?;
+    for tick in &run.ticks {
+        for (v, id) in tick.vessels.iter().zip(&config.scenario.ids) {
+            let s = &v.state;
+            writeln!(
+                w,
+                "{:.3},{},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6}",
+                tick.t,
+                id,
+                s.x,
+                s.y,
+                s.psi,
+                s.vel.x,
+                s.vel.y,
+                s.vel.z,
+                v.command.u_d,
+                v.command.r_d,
+                v.command.e,
+                v.command.psi_e,
+                v.tau_d.x,
+                v.tau_d.y,
+                v.tau_d.z,
+                v.estimate.x,
+                v.estimate.y,
+                v.estimate.z,
+                tick.h
+            )?;
+        }
+    }
+    w.flush()
+}
+
+/// Writes `summary.json`.
+pub fn write_summary(path: &Path, summary: &Summary) -> std::io::Result<()> {
+    let text = serde_json::to_string_pretty(summary).expect("summaries serialize");
+    std::fs::write(path, text + "\n")
+}
