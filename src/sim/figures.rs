@@ -1,10 +1,386 @@
-//! The four figures of a run (PNG and SVG), drawn with plotters.
+//! The four figures of a run, as PNG and SVG (plotters), laid out like the
+//! paper's: Fig. 1 observer errors, Fig. 2 tracking errors, Fig. 3 H(P) and
+//! the comparison with Lloyd, Fig. 4 the evolution of the partition.
+//!
+//! Text is drawn with an embedded DejaVu Sans (`assets/fonts`), so figures
+//! need no system fonts or font libraries.
 
 use std::path::Path;
+use std::sync::Once;
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters::style::colors::colormaps::{ColorMap, ViridisRGB};
 
 use super::{Config, Run};
+use crate::coverage::CellGeometry;
 
-/// Draws every figure into `out`.
-pub fn draw_all(_out: &Path, _config: &Config, _run: &Run) -> Result<(), String> {
+const FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
+
+fn register_font() -> Result<(), String> {
+    static ONCE: Once = Once::new();
+    let mut result = Ok(());
+    ONCE.call_once(|| {
+        result = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT)
+            .map_err(|_| "the embedded font is invalid".to_string());
+    });
+    result
+}
+
+#[derive(Clone, Copy)]
+enum Figure {
+    Observer,
+    Tracking,
+    Metric,
+    Evolution,
+}
+
+fn draw<DB: DrawingBackend>(
+    which: Figure,
+    area: &DrawingArea<DB, Shift>,
+    config: &Config,
+    run: &Run,
+) -> Result<(), String> {
+    match which {
+        Figure::Observer => observer(area, config, run),
+        Figure::Tracking => tracking(area, config, run),
+        Figure::Metric => metric(area, config, run),
+        Figure::Evolution => evolution(area, config, run),
+    }
+}
+
+/// Draws every figure into `out` as `NAME.png` and `NAME.svg`.
+pub fn draw_all(out: &Path, config: &Config, run: &Run) -> Result<(), String> {
+    register_font()?;
+    let figures = [
+        ("fig1-observer", (1200, 1000), Figure::Observer),
+        ("fig2-tracking", (1400, 1000), Figure::Tracking),
+        ("fig3-metric", (1400, 560), Figure::Metric),
+        ("fig4-evolution", (1200, 1200), Figure::Evolution),
+    ];
+    for (name, size, which) in figures {
+        let png = out.join(format!("{name}.png"));
+        {
+            let area = BitMapBackend::new(&png, size).into_drawing_area();
+            draw(which, &area, config, run)?;
+            area.present().map_err(|e| format!("{name}.png: {e}"))?;
+        }
+        let svg = out.join(format!("{name}.svg"));
+        {
+            let area = SVGBackend::new(&svg, size).into_drawing_area();
+            draw(which, &area, config, run)?;
+            area.present().map_err(|e| format!("{name}.svg: {e}"))?;
+        }
+    }
+    Ok(())
+}
+
+fn err<E: std::fmt::Display>(e: E) -> String {
+    e.to_string()
+}
+
+/// One panel of time series, one line per vessel.
+fn panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    title: &str,
+    y_label: &str,
+    t_max: f64,
+    series: &[(String, Vec<(f64, f64)>)],
+    legend: bool,
+) -> Result<(), String> {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for (_, s) in series {
+        for &(_, y) in s {
+            if y.is_finite() {
+                lo = lo.min(y);
+                hi = hi.max(y);
+            }
+        }
+    }
+    if !(lo.is_finite() && hi.is_finite()) {
+        (lo, hi) = (-1.0, 1.0);
+    }
+    let pad = ((hi - lo) * 0.05).max(1e-6);
+    let mut chart = ChartBuilder::on(area)
+        .caption(title, ("sans-serif", 22))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(70)
+        .build_cartesian_2d(0.0..t_max, (lo - pad)..(hi + pad))
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc("t (s)")
+        .y_desc(y_label)
+        .label_style(("sans-serif", 14))
+        .draw()
+        .map_err(err)?;
+    for (i, (name, points)) in series.iter().enumerate() {
+        let color = Palette99::pick(i).to_rgba();
+        chart
+            // 1 px: plotters-bitmap draws wide strokes of near-vertical
+            // segments with spikes far outside the panel.
+            .draw_series(LineSeries::new(
+                points.iter().copied(),
+                color.stroke_width(1),
+            ))
+            .map_err(err)?
+            .label(name.clone())
+            .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], color.stroke_width(2)));
+    }
+    if legend {
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 14))
+            .draw()
+            .map_err(err)?;
+    }
+    Ok(())
+}
+
+/// Per-vessel series of `f(tick, vessel sample)`.
+fn per_vessel(
+    config: &Config,
+    run: &Run,
+    f: impl Fn(&super::Tick, &super::VesselSample) -> f64,
+) -> Vec<(String, Vec<(f64, f64)>)> {
+    config
+        .scenario
+        .ids
+        .iter()
+        .enumerate()
+        .map(|(i, id)| {
+            let points = run
+                .ticks
+                .iter()
+                .map(|t| (t.t, f(t, &t.vessels[i])))
+                .collect();
+            (id.clone(), points)
+        })
+        .collect()
+}
+
+fn observer<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    config: &Config,
+    run: &Run,
+) -> Result<(), String> {
+    root.fill(&WHITE).map_err(err)?;
+    let rows = root.split_evenly((3, 1));
+    let names = ["τ_ue (N)", "τ_ve (N)", "τ_re (N m)"];
+    for (c, area) in rows.iter().enumerate() {
+        let series = per_vessel(config, run, |_, v| v.estimate[c] - v.tau_d[c]);
+        let title = format!("Fig. 1{} observer error {}", ["a", "b", "c"][c], names[c]);
+        panel(area, &title, names[c], config.duration, &series, c == 0)?;
+    }
+    Ok(())
+}
+
+fn tracking<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    config: &Config,
+    run: &Run,
+) -> Result<(), String> {
+    root.fill(&WHITE).map_err(err)?;
+    let cells = root.split_evenly((2, 2));
+    let psi = per_vessel(config, run, |_, v| v.command.psi_e);
+    let dist = per_vessel(config, run, |_, v| v.command.e);
+    let ue = per_vessel(config, run, |_, v| v.state.vel.x - v.command.u_d);
+    let re = per_vessel(config, run, |_, v| v.state.vel.z - v.command.r_d);
+    let mode = config.guidance.mode.name();
+    panel(
+        &cells[0],
+        &format!("Fig. 2a heading error ψ_e ({mode})"),
+        "ψ_e (rad)",
+        config.duration,
+        &psi,
+        true,
+    )?;
+    panel(
+        &cells[1],
+        "Fig. 2b distance to centroid E",
+        "E (m)",
+        config.duration,
+        &dist,
+        false,
+    )?;
+    panel(
+        &cells[2],
+        "Fig. 2c surge error u − u_d",
+        "u_e (m/s)",
+        config.duration,
+        &ue,
+        false,
+    )?;
+    panel(
+        &cells[3],
+        "Fig. 2d yaw-rate error r − r_d",
+        "r_e (rad/s)",
+        config.duration,
+        &re,
+        false,
+    )?;
+    Ok(())
+}
+
+fn metric<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    config: &Config,
+    run: &Run,
+) -> Result<(), String> {
+    root.fill(&WHITE).map_err(err)?;
+    let halves = root.split_evenly((1, 2));
+    let ours: Vec<(f64, f64)> = run.ticks.iter().map(|t| (t.t, t.h)).collect();
+    let lloyd: Vec<(f64, f64)> = run.ticks.iter().map(|t| (t.t, t.lloyd_h)).collect();
+    let mode = config.guidance.mode.name();
+    panel(
+        &halves[0],
+        &format!("Fig. 3a H(P), USVs ({mode} guidance)"),
+        "H(P)",
+        config.duration,
+        &[(format!("USVs, {mode}"), ours.clone())],
+        false,
+    )?;
+    panel(
+        &halves[1],
+        "Fig. 3b USVs vs Lloyd (ṗ = k (C − p))",
+        "H(P)",
+        config.duration,
+        &[
+            (format!("USVs, {mode}"), ours),
+            (format!("Lloyd, k = {}", config.lloyd_gain), lloyd),
+        ],
+        true,
+    )
+}
+
+fn evolution<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    config: &Config,
+    run: &Run,
+) -> Result<(), String> {
+    root.fill(&WHITE).map_err(err)?;
+    let region = &config.scenario.region;
+    let risk = &config.scenario.risk;
+    let (lo, hi) = region.bounds();
+    let margin = 0.05 * (hi.x - lo.x).max(hi.y - lo.y);
+    let (x0, x1, y0, y1) = (lo.x - margin, hi.x + margin, lo.y - margin, hi.y + margin);
+    // Φ on a grid, for the heat map and its scale.
+    let n = 90;
+    let (dx, dy) = ((hi.x - lo.x) / n as f64, (hi.y - lo.y) / n as f64);
+    let mut phi = Vec::with_capacity(n * n);
+    for i in 0..n {
+        for j in 0..n {
+            let q = crate::geometry::Point {
+                x: lo.x + (i as f64 + 0.5) * dx,
+                y: lo.y + (j as f64 + 0.5) * dy,
+            };
+            phi.push((q, region.contains(q).then(|| risk.value(q))));
+        }
+    }
+    let pmax = phi.iter().filter_map(|p| p.1).fold(0.0, f64::max);
+    let pmin = phi.iter().filter_map(|p| p.1).fold(f64::INFINITY, f64::min);
+
+    let panels = root.split_evenly((2, 2));
+    for (area, snap) in panels.iter().zip(&run.snapshots) {
+        let mut chart = ChartBuilder::on(area)
+            .caption(format!("Fig. 4 t = {:.0} s", snap.t), ("sans-serif", 22))
+            .margin(10)
+            .x_label_area_size(30)
+            .y_label_area_size(40)
+            .build_cartesian_2d(x0..x1, y0..y1)
+            .map_err(err)?;
+        chart
+            .configure_mesh()
+            .disable_mesh()
+            .label_style(("sans-serif", 13))
+            .draw()
+            .map_err(err)?;
+        chart
+            .draw_series(phi.iter().filter_map(|(q, v)| {
+                v.map(|v| {
+                    let c = ViridisRGB.get_color_normalized(v as f32, pmin as f32, pmax as f32);
+                    Rectangle::new(
+                        [
+                            (q.x - dx / 2.0, q.y - dy / 2.0),
+                            (q.x + dx / 2.0, q.y + dy / 2.0),
+                        ],
+                        c.filled(),
+                    )
+                })
+            }))
+            .map_err(err)?;
+        // Region outline and holes.
+        let ring = |r: &[crate::geometry::Point]| {
+            let mut pts: Vec<(f64, f64)> = r.iter().map(|p| (p.x, p.y)).collect();
+            pts.push(pts[0]);
+            pts
+        };
+        chart
+            .draw_series(std::iter::once(PathElement::new(
+                ring(region.shell()),
+                BLACK.stroke_width(2),
+            )))
+            .map_err(err)?;
+        for h in region.holes() {
+            chart
+                .draw_series(std::iter::once(Polygon::new(
+                    ring(h),
+                    BLACK.mix(0.6).filled(),
+                )))
+                .map_err(err)?;
+        }
+        // Cells.
+        for cell in &snap.cells {
+            if matches!(cell, CellGeometry::Empty) {
+                continue;
+            }
+            for piece in cell.pieces(region).0 {
+                let pts: Vec<(f64, f64)> = piece.exterior().coords().map(|c| (c.x, c.y)).collect();
+                chart
+                    .draw_series(std::iter::once(PathElement::new(
+                        pts,
+                        WHITE.stroke_width(2),
+                    )))
+                    .map_err(err)?;
+            }
+        }
+        // Trails, vessels (diamonds) and centroids (crosses).
+        let upto = run.ticks.iter().take_while(|t| t.t <= snap.t + 1e-9);
+        let upto: Vec<&super::Tick> = upto.collect();
+        for i in 0..config.scenario.ids.len() {
+            let color = Palette99::pick(i).to_rgba();
+            let trail: Vec<(f64, f64)> = upto
+                .iter()
+                .map(|t| (t.vessels[i].state.x, t.vessels[i].state.y))
+                .collect();
+            chart
+                .draw_series(std::iter::once(PathElement::new(
+                    trail,
+                    color.stroke_width(2),
+                )))
+                .map_err(err)?;
+            if let Some(last) = upto.last() {
+                let v = &last.vessels[i];
+                let (x, y) = (v.state.x, v.state.y);
+                let s = 0.012 * (x1 - x0);
+                chart
+                    .draw_series(std::iter::once(Polygon::new(
+                        vec![(x + s, y), (x, y + s), (x - s, y), (x, y - s)],
+                        color.filled(),
+                    )))
+                    .map_err(err)?;
+                chart
+                    .draw_series(std::iter::once(Cross::new(
+                        (v.centroid.x, v.centroid.y),
+                        5,
+                        WHITE.stroke_width(2),
+                    )))
+                    .map_err(err)?;
+            }
+        }
+    }
     Ok(())
 }
