@@ -157,6 +157,9 @@ mod tests {
                 }
                 let (bu, br) = (gains.surge.settling_bound(), gains.yaw.settling_bound());
                 let (tu, tr) = (t_u.expect("surge converges"), t_r.expect("yaw converges"));
+                println!(
+                    "start {start:?}: surge {tu:.2} s (bound {bu:.2} s), yaw {tr:.2} s (bound {br:.2} s)"
+                );
                 assert!(tu <= bu, "surge {tu} s > bound {bu} s");
                 assert!(tr <= br, "yaw {tr} s > bound {br} s");
                 // And it stays there.
