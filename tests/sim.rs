@@ -93,6 +93,17 @@ fn writes_csv_summary_and_figures() {
 }
 
 #[test]
+fn the_final_state_is_recorded_between_ticks() {
+    let out = tmp("odd");
+    sim(&out, &["--duration", "1.25", "--no-figures"]);
+    let csv = std::fs::read_to_string(out.join("timeseries.csv")).unwrap();
+    let last = csv.lines().last().unwrap();
+    assert!(last.starts_with("1.250,usv-8,"), "{last}");
+    assert_eq!(csv.lines().count(), 1 + 14 * 8);
+    std::fs::remove_dir_all(out).unwrap();
+}
+
+#[test]
 fn runs_are_deterministic_for_a_seed() {
     let (a, b, c) = (tmp("det-a"), tmp("det-b"), tmp("det-c"));
     let args = ["--duration", "8", "--disturbance", "gusts", "--no-figures"];

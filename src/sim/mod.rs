@@ -288,7 +288,9 @@ pub fn run(config: &Config, mut progress: impl FnMut(f64)) -> Result<Run, SimErr
 
     for k in 0..=steps {
         let t = k as f64 * h;
-        if k % per_tick == 0 {
+        // Every tick, and the final state even when the duration is not a
+        // whole number of ticks.
+        if k % per_tick == 0 || k == steps {
             let diverged = states.iter().position(|s| {
                 !(s.x.is_finite() && s.y.is_finite()) || s.x.abs() > 1e6 || s.y.abs() > 1e6
             });
