@@ -9,9 +9,11 @@
 //! - [`scenario`]: the shell that turns a scenario document into validated core
 //!   types and an evaluation back into its document.
 
+pub mod agent;
 pub mod control;
 pub mod coverage;
 pub mod geometry;
 pub mod protocol;
 pub mod scenario;
+pub mod server;
 pub mod sim;

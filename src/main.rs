@@ -32,6 +32,42 @@ enum Command {
         #[arg(long)]
         tolerance: Option<f64>,
     },
+    /// Run the coordinator: HTTP API, vessel links, coverage tick.
+    Serve {
+        /// Address to listen on (loopback only until tokens exist).
+        #[arg(long, default_value = "127.0.0.1:8080")]
+        bind: String,
+        /// Run the tick clock this many times faster than real time.
+        #[arg(long, default_value_t = 1.0)]
+        time_warp: f64,
+    },
+    /// Run simulated vessels, each on its own link to a coordinator.
+    Agent {
+        /// Coordinator base URL, e.g. http://127.0.0.1:8080.
+        #[arg(long)]
+        server: String,
+        /// How many vessels (named usv-1 …); the first eight start where the
+        /// paper's do, further ones at random in the paper's region.
+        #[arg(long, default_value_t = 8)]
+        vessels: usize,
+        /// Run one vessel with this id instead.
+        #[arg(long)]
+        id: Option<String>,
+        /// Vessel preset: `paper` or `otter`.
+        #[arg(long, default_value = "paper")]
+        preset: String,
+        #[arg(long, default_value_t = 1.0)]
+        time_warp: f64,
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
+    /// Coordinator and eight simulated vessels on loopback, paper scenario.
+    Demo {
+        #[arg(long, default_value = "127.0.0.1:8080")]
+        bind: String,
+        #[arg(long, default_value_t = 1.0)]
+        time_warp: f64,
+    },
     /// Simulate the closed loop (dynamics, observer, controller, guidance,
     /// coverage) in one process and write CSV, JSON and figures.
     Sim {
@@ -73,6 +109,16 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         Command::Evaluate { file, tolerance } => evaluate(file, tolerance),
+        Command::Serve { bind, time_warp } => report(runtime().block_on(serve(&bind, time_warp))),
+        Command::Agent {
+            server,
+            vessels,
+            id,
+            preset,
+            time_warp,
+            seed,
+        } => report(runtime().block_on(agent(&server, vessels, id, &preset, time_warp, seed))),
+        Command::Demo { bind, time_warp } => report(runtime().block_on(demo(&bind, time_warp))),
         Command::Sim {
             scenario,
             duration,
@@ -99,6 +145,173 @@ fn main() -> ExitCode {
             }
         },
     }
+}
+
+fn runtime() -> tokio::runtime::Runtime {
+    tokio::runtime::Builder::new_multi_thread()
+        .enable_all()
+        .build()
+        .expect("a tokio runtime")
+}
+
+fn report(result: anyhow::Result<()>) -> ExitCode {
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("seacover: {e:#}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+/// Cancels `token` on ctrl-c or SIGTERM.
+fn cancel_on_signal(token: tokio_util::sync::CancellationToken) {
+    tokio::spawn(async move {
+        let ctrl_c = tokio::signal::ctrl_c();
+        #[cfg(unix)]
+        {
+            let mut term =
+                tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate())
+                    .expect("a SIGTERM handler");
+            tokio::select! {
+                _ = ctrl_c => {}
+                _ = term.recv() => {}
+            }
+        }
+        #[cfg(not(unix))]
+        let _ = ctrl_c.await;
+        token.cancel();
+    });
+}
+
+fn check_warp(w: f64) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        w.is_finite() && (0.01..=1000.0).contains(&w),
+        "--time-warp must be in [0.01, 1000]"
+    );
+    Ok(())
+}
+
+async fn serve(bind: &str, time_warp: f64) -> anyhow::Result<()> {
+    use anyhow::Context;
+    check_warp(time_warp)?;
+    let listener = tokio::net::TcpListener::bind(bind)
+        .await
+        .with_context(|| format!("binding {bind}"))?;
+    let token = tokio_util::sync::CancellationToken::new();
+    cancel_on_signal(token.clone());
+    tracing::info!(addr = %listener.local_addr()?, "serving");
+    let config = seacover::server::ServeConfig {
+        time_warp,
+        ..Default::default()
+    };
+    seacover::server::serve(listener, config, token).await?;
+    Ok(())
+}
+
+fn link_url(server: &str) -> anyhow::Result<String> {
+    let base = server.trim_end_matches('/');
+    let ws = if let Some(rest) = base.strip_prefix("http://") {
+        format!("ws://{rest}")
+    } else if let Some(rest) = base.strip_prefix("https://") {
+        format!("wss://{rest}")
+    } else if base.starts_with("ws://") || base.starts_with("wss://") {
+        base.to_string()
+    } else {
+        anyhow::bail!("--server must be an http:// or ws:// URL, got {server:?}");
+    };
+    Ok(format!("{ws}/api/v1/vessels/link"))
+}
+
+async fn agent(
+    server: &str,
+    n: usize,
+    id: Option<String>,
+    preset: &str,
+    time_warp: f64,
+    seed: u64,
+) -> anyhow::Result<()> {
+    use anyhow::Context;
+    use seacover::agent::{AgentConfig, paper_vessels, random_vessels, run_fleet};
+    use seacover::control::model::VesselParams;
+    check_warp(time_warp)?;
+    anyhow::ensure!((1..=10_000).contains(&n), "--vessels must be in [1, 10000]");
+    let params = VesselParams::preset(preset).with_context(|| {
+        format!(
+            "--preset: unknown preset {preset:?} ({})",
+            VesselParams::PRESETS.join(", ")
+        )
+    })?;
+    let mut vessels = paper_vessels(params);
+    if n > vessels.len() {
+        let extra = random_vessels(
+            "usv",
+            n - vessels.len(),
+            (0.0, 0.0),
+            (100.0, 100.0),
+            seed,
+            params,
+        );
+        vessels.extend(extra.into_iter().enumerate().map(|(i, mut v)| {
+            v.id = format!("usv-{}", 9 + i);
+            v.index = 9 + i;
+            v
+        }));
+    }
+    vessels.truncate(n);
+    if let Some(id) = id {
+        anyhow::ensure!(
+            seacover::scenario::valid_id(&id),
+            "--id must match [A-Za-z0-9_.-]{{1,64}}"
+        );
+        vessels.truncate(1);
+        vessels[0].id = id;
+    }
+    let config = AgentConfig {
+        url: link_url(server)?,
+        time_warp,
+        pose_hz: 20.0,
+        seed,
+    };
+    let token = tokio_util::sync::CancellationToken::new();
+    cancel_on_signal(token.clone());
+    run_fleet(config, vessels, token).await;
+    Ok(())
+}
+
+async fn demo(bind: &str, time_warp: f64) -> anyhow::Result<()> {
+    use anyhow::Context;
+    use seacover::agent::{AgentConfig, paper_vessels, run_fleet};
+    use seacover::control::model::VesselParams;
+    check_warp(time_warp)?;
+    let listener = tokio::net::TcpListener::bind(bind)
+        .await
+        .with_context(|| format!("binding {bind}"))?;
+    let addr = listener.local_addr()?;
+    let token = tokio_util::sync::CancellationToken::new();
+    cancel_on_signal(token.clone());
+    let config = seacover::server::ServeConfig {
+        time_warp,
+        ..Default::default()
+    };
+    let server = tokio::spawn(seacover::server::serve(listener, config, token.clone()));
+    let agents = AgentConfig {
+        url: format!("ws://{addr}/api/v1/vessels/link"),
+        time_warp,
+        pose_hz: 20.0,
+        seed: 1,
+    };
+    let fleet = tokio::spawn(run_fleet(
+        agents,
+        paper_vessels(VesselParams::PAPER),
+        token.clone(),
+    ));
+    println!("seacover demo: coordinator on http://{addr}/ with 8 vessels (usv-1 … usv-8)");
+    println!("  coverage: http://{addr}/api/v1/coverage   vessels: http://{addr}/api/v1/vessels");
+    println!("  stop with ctrl-c");
+    fleet.await?;
+    server.await??;
+    Ok(())
 }
 
 #[allow(clippy::too_many_arguments)]

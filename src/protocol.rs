@@ -99,3 +99,125 @@ pub struct ErrorDetail {
     pub code: String,
     pub message: String,
 }
+
+/// Actuator of a vessel (f_i = k exp(−β‖q − p_i‖²)).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ActuatorDocument {
+    pub k: f64,
+    pub beta: f64,
+}
+
+/// Vessel → coordinator on `/api/v1/vessels/link`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case")]
+pub enum VesselMessage {
+    Hello {
+        vessel: String,
+        protocol: u32,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        actuator: Option<ActuatorDocument>,
+    },
+    Pose(PoseDocument),
+}
+
+/// A pose report: the vessel's own clock, pose and body velocities.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PoseDocument {
+    pub t: f64,
+    pub x: f64,
+    pub y: f64,
+    pub psi: f64,
+    pub u: f64,
+    pub v: f64,
+    pub r: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub telemetry: Option<serde_json::Value>,
+}
+
+/// Coordinator → vessel.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case")]
+pub enum CoordinatorMessage {
+    Welcome { vessel: String, tick_hz: f64 },
+    Command(CommandDocument),
+    Error { code: String, message: String },
+}
+
+/// One command, computed from the newest pose of every live vessel.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CommandDocument {
+    pub tick: u64,
+    pub u_d: f64,
+    pub r_d: f64,
+    pub u_d_dot: f64,
+    pub r_d_dot: f64,
+    pub centroid: XY,
+    #[serde(rename = "E")]
+    pub e: f64,
+    pub psi_e: f64,
+}
+
+/// `GET /api/v1/mission`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MissionDocument {
+    pub region: RegionDocument,
+    pub risk: RiskDocument,
+    pub actuator: ActuatorDocument,
+    pub guidance: GuidanceDocument,
+    pub tick_hz: f64,
+}
+
+/// Guidance mode and gains of a mission.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GuidanceDocument {
+    pub mode: String,
+    pub k_r1: f64,
+    pub k_r2: f64,
+    pub b1: f64,
+    pub k_u1: f64,
+    pub k_u2: f64,
+    pub b2: f64,
+    pub arrival_radius: f64,
+    pub max_speed: f64,
+    pub max_yaw_rate: f64,
+    pub filter_time: f64,
+}
+
+/// One vessel as the coordinator sees it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct VesselStatusDocument {
+    pub id: String,
+    pub connected: bool,
+    /// Within the liveness timeout, hence in the partition.
+    pub live: bool,
+    pub pose: Option<PoseDocument>,
+    pub actuator: ActuatorDocument,
+    pub polygon: Option<Vec<XY>>,
+    pub mass: f64,
+    pub centroid: Option<XY>,
+    pub last_command: Option<CommandDocument>,
+    /// Mission time of the newest pose [s].
+    pub last_seen: Option<f64>,
+}
+
+/// `GET /api/v1/coverage`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CoverageDocument {
+    pub tick: u64,
+    /// Mission time [s].
+    pub time: f64,
+    #[serde(rename = "H")]
+    pub h: f64,
+    pub cells: Vec<CellDocument>,
+}
+
+/// What the dashboard stream sends.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SnapshotDocument {
+    pub tick: u64,
+    pub time: f64,
+    #[serde(rename = "H")]
+    pub h: f64,
+    pub mission: MissionDocument,
+    pub vessels: Vec<VesselStatusDocument>,
+}

@@ -1,0 +1,272 @@
+//! `seacover agent`: simulated vessels on real links (SPEC §3).
+//!
+//! Each vessel is one task with its own WebSocket link. On board it runs the
+//! dynamics (RK4, 1 ms), the disturbance, the observer and the controller in
+//! simulated time locked to the (warped) wall clock, reports its pose at
+//! 20 Hz, and tracks the newest command, extrapolated with its rates; when
+//! that command is more than 1 s old it holds station (u_d = r_d = 0).
+//! A lost link is retried with exponential backoff and jitter; the vessel
+//! keeps moving meanwhile, as a real one would.
+
+use std::time::Duration;
+
+use futures_util::{SinkExt, StreamExt};
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use tokio_tungstenite::tungstenite::Message;
+use tokio_util::sync::CancellationToken;
+
+use crate::control::Vec3;
+use crate::control::controller::{ControllerGains, Reference, control};
+use crate::control::disturbance::Disturbance;
+use crate::control::model::{State, VesselParams, step};
+use crate::control::observer::{Observer, ObserverGains};
+use crate::protocol::{CommandDocument, CoordinatorMessage, PoseDocument, VesselMessage};
+
+/// One simulated vessel's settings.
+#[derive(Debug, Clone)]
+pub struct VesselConfig {
+    pub id: String,
+    /// Index used by the paper's disturbance model (1-based).
+    pub index: usize,
+    pub start: State,
+    pub params: VesselParams,
+}
+
+/// Settings shared by a fleet of agents.
+#[derive(Debug, Clone)]
+pub struct AgentConfig {
+    /// `ws://host:port/api/v1/vessels/link`.
+    pub url: String,
+    pub time_warp: f64,
+    pub pose_hz: f64,
+    pub seed: u64,
+}
+
+/// Starts from the built-in paper scenario (ids usv-1 … usv-8).
+pub fn paper_vessels(params: VesselParams) -> Vec<VesselConfig> {
+    let doc =
+        crate::scenario::parse_document(crate::sim::PAPER_SCENARIO).expect("built-in scenario");
+    doc.vessels
+        .iter()
+        .enumerate()
+        .map(|(i, v)| VesselConfig {
+            id: v.id.clone(),
+            index: i + 1,
+            start: State {
+                x: v.x,
+                y: v.y,
+                psi: v.psi.unwrap_or(0.0),
+                vel: Vec3::zeros(),
+            },
+            params,
+        })
+        .collect()
+}
+
+/// `n` vessels named `{prefix}-1` …, started uniformly in [min, max].
+pub fn random_vessels(
+    prefix: &str,
+    n: usize,
+    min: (f64, f64),
+    max: (f64, f64),
+    seed: u64,
+    params: VesselParams,
+) -> Vec<VesselConfig> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    (0..n)
+        .map(|i| VesselConfig {
+            id: format!("{prefix}-{}", i + 1),
+            index: i + 1,
+            start: State {
+                x: rng.random_range(min.0..max.0),
+                y: rng.random_range(min.1..max.1),
+                psi: rng.random_range(-std::f64::consts::PI..std::f64::consts::PI),
+                vel: Vec3::zeros(),
+            },
+            params,
+        })
+        .collect()
+}
+
+/// The on-board simulation of one vessel.
+struct Onboard {
+    params: VesselParams,
+    state: State,
+    observer: Observer,
+    controller: ControllerGains,
+    disturbance: Disturbance,
+    t: f64,
+    /// The newest command and the on-board time it arrived.
+    command: Option<(CommandDocument, f64)>,
+}
+
+impl Onboard {
+    fn new(v: &VesselConfig) -> Self {
+        Onboard {
+            params: v.params,
+            state: v.start,
+            observer: Observer::new(v.params, ObserverGains::default()),
+            controller: ControllerGains::default(),
+            disturbance: Disturbance::Paper { index: v.index },
+            t: 0.0,
+            command: None,
+        }
+    }
+
+    /// Advances `seconds` of simulated time in 1 ms steps.
+    fn advance(&mut self, seconds: f64) {
+        let h = 1e-3;
+        let steps = (seconds / h).round() as usize;
+        for _ in 0..steps {
+            let reference = match &self.command {
+                Some((c, at)) if self.t - at <= 1.0 => {
+                    let since = self.t - at;
+                    Reference {
+                        u_d: c.u_d + c.u_d_dot * since,
+                        r_d: c.r_d + c.r_d_dot * since,
+                        u_d_dot: c.u_d_dot,
+                        r_d_dot: c.r_d_dot,
+                    }
+                }
+                // No command, or a stale one: hold station.
+                _ => Reference::default(),
+            };
+            self.observer.measure(self.state.vel, h);
+            let (tu, tr) = control(
+                &self.params,
+                &self.controller,
+                self.state.vel,
+                &reference,
+                self.observer.estimate(),
+            );
+            let d = &self.disturbance;
+            let (next, applied) = step(&self.params, &self.state, tu, tr, self.t, h, |t, s| {
+                d.value(t, s.psi)
+            });
+            self.observer.actuate(Vec3::new(applied.0, 0.0, applied.1));
+            self.state = next;
+            self.t += h;
+        }
+    }
+
+    fn pose(&self) -> PoseDocument {
+        let tau = self.disturbance.value(self.t, self.state.psi);
+        let est = self.observer.estimate();
+        PoseDocument {
+            t: self.t,
+            x: self.state.x,
+            y: self.state.y,
+            psi: self.state.psi,
+            u: self.state.vel.x,
+            v: self.state.vel.y,
+            r: self.state.vel.z,
+            telemetry: Some(serde_json::json!({
+                "tau_d": [tau.x, tau.y, tau.z],
+                "tau_d_hat": [est.x, est.y, est.z],
+            })),
+        }
+    }
+}
+
+/// Runs every vessel until `shutdown`.
+pub async fn run_fleet(
+    config: AgentConfig,
+    vessels: Vec<VesselConfig>,
+    shutdown: CancellationToken,
+) {
+    let tasks: Vec<_> = vessels
+        .into_iter()
+        .enumerate()
+        .map(|(i, v)| {
+            tokio::spawn(run_vessel(
+                config.clone(),
+                v,
+                config.seed.wrapping_add(i as u64),
+                shutdown.clone(),
+            ))
+        })
+        .collect();
+    for t in tasks {
+        let _ = t.await;
+    }
+}
+
+async fn run_vessel(
+    config: AgentConfig,
+    vessel: VesselConfig,
+    seed: u64,
+    shutdown: CancellationToken,
+) {
+    let mut onboard = Onboard::new(&vessel);
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let period = 1.0 / config.pose_hz;
+    let real_period = Duration::from_secs_f64(period / config.time_warp);
+    let mut backoff = Duration::from_millis(100);
+    while !shutdown.is_cancelled() {
+        let connected = tokio::select! {
+            _ = shutdown.cancelled() => return,
+            c = tokio_tungstenite::connect_async(config.url.as_str()) => c,
+        };
+        let Ok((socket, _)) = connected else {
+            // Keep sailing while disconnected.
+            let jitter = rng.random_range(0.5..1.5);
+            let wait = backoff.mul_f64(jitter);
+            onboard.advance(wait.as_secs_f64() * config.time_warp);
+            tokio::select! {
+                _ = shutdown.cancelled() => return,
+                _ = tokio::time::sleep(wait) => {}
+            }
+            backoff = (backoff * 2).min(Duration::from_secs(5));
+            continue;
+        };
+        backoff = Duration::from_millis(100);
+        let (mut sink, mut stream) = socket.split();
+        let hello = VesselMessage::Hello {
+            vessel: vessel.id.clone(),
+            protocol: 1,
+            actuator: None,
+        };
+        if sink
+            .send(Message::text(
+                serde_json::to_string(&hello).expect("serializes"),
+            ))
+            .await
+            .is_err()
+        {
+            continue;
+        }
+        let mut ticker = tokio::time::interval(real_period);
+        ticker.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+        loop {
+            tokio::select! {
+                _ = shutdown.cancelled() => {
+                    let _ = sink.send(Message::Close(None)).await;
+                    return;
+                }
+                _ = ticker.tick() => {
+                    onboard.advance(period);
+                    let pose = VesselMessage::Pose(onboard.pose());
+                    if sink.send(Message::text(serde_json::to_string(&pose).expect("serializes"))).await.is_err() {
+                        break;
+                    }
+                }
+                frame = stream.next() => match frame {
+                    Some(Ok(Message::Text(t))) => match serde_json::from_str::<CoordinatorMessage>(&t) {
+                        Ok(CoordinatorMessage::Command(c)) => onboard.command = Some((c, onboard.t)),
+                        Ok(CoordinatorMessage::Welcome { .. }) => {}
+                        Ok(CoordinatorMessage::Error { code, message }) if code == "shutting_down" => {
+                            tracing::info!(vessel = %vessel.id, %message, "coordinator stopping");
+                        }
+                        Ok(CoordinatorMessage::Error { code, message }) => {
+                            tracing::warn!(vessel = %vessel.id, %code, %message, "coordinator error");
+                        }
+                        Err(e) => tracing::warn!(vessel = %vessel.id, error = %e, "unreadable frame"),
+                    },
+                    Some(Ok(Message::Close(_))) | None | Some(Err(_)) => break,
+                    Some(Ok(_)) => {}
+                },
+            }
+        }
+    }
+}

@@ -1,0 +1,72 @@
+//! REST handlers. Reads come from the newest snapshot; evaluation is a
+//! stateless what-if that fills in the mission's region and risk.
+
+use axum::Json;
+use axum::body::Bytes;
+use axum::extract::{Path, State};
+
+use super::AppState;
+use super::error::ApiError;
+use crate::coverage::Options;
+use crate::protocol::{
+    CoverageDocument, EvaluationDocument, MissionDocument, RiskObjectDocument, VesselStatusDocument,
+};
+use crate::scenario::{Scenario, evaluation_document, parse_document};
+
+pub async fn healthz() -> &'static str {
+    "ok"
+}
+
+pub async fn mission(State(app): State<AppState>) -> Json<MissionDocument> {
+    Json(app.snapshot.borrow().document.mission.clone())
+}
+
+pub async fn risk_objects(State(app): State<AppState>) -> Json<Vec<RiskObjectDocument>> {
+    Json(app.snapshot.borrow().document.mission.risk.objects.clone())
+}
+
+pub async fn vessels(State(app): State<AppState>) -> Json<Vec<VesselStatusDocument>> {
+    Json(app.snapshot.borrow().document.vessels.clone())
+}
+
+pub async fn vessel(
+    State(app): State<AppState>,
+    Path(id): Path<String>,
+) -> Result<Json<VesselStatusDocument>, ApiError> {
+    let snap = app.snapshot.borrow().clone();
+    snap.document
+        .vessels
+        .iter()
+        .find(|v| v.id == id)
+        .cloned()
+        .map(Json)
+        .ok_or_else(|| ApiError::NotFound(format!("no vessel {id:?}")))
+}
+
+pub async fn coverage(State(app): State<AppState>) -> Json<CoverageDocument> {
+    Json(app.snapshot.borrow().coverage.clone())
+}
+
+pub async fn evaluate(
+    State(app): State<AppState>,
+    body: Bytes,
+) -> Result<Json<EvaluationDocument>, ApiError> {
+    let text = std::str::from_utf8(&body)
+        .map_err(|e| ApiError::Malformed(format!("body is not UTF-8: {e}")))?;
+    let mut doc = parse_document(text)?;
+    {
+        let snap = app.snapshot.borrow();
+        let mission = &snap.document.mission;
+        doc.region.get_or_insert_with(|| mission.region.clone());
+        doc.risk.get_or_insert_with(|| mission.risk.clone());
+    }
+    // Up to 10 000 vessels: CPU work, off the async workers.
+    let result = tokio::task::spawn_blocking(move || {
+        let scenario = Scenario::from_document(&doc)?;
+        let eval = scenario.evaluate(&Options::default());
+        Ok::<_, ApiError>(evaluation_document(&scenario.region, &scenario.ids, &eval))
+    })
+    .await
+    .map_err(|_| ApiError::ShuttingDown)??;
+    Ok(Json(result))
+}

@@ -1,0 +1,406 @@
+//! The coordinator's state and the tick task that owns it.
+//!
+//! Invariants:
+//! - one task ([`Coordinator::run`]) owns the mission and the fleet; links and
+//!   HTTP handlers talk to it through a bounded channel of [`Request`]s and
+//!   read the newest [`Snapshot`] from a `watch`; no lock is ever held across
+//!   an `.await`;
+//! - a tick that overruns is skipped (`MissedTickBehavior::Skip`), never
+//!   queued;
+//! - mission time advances exactly 1/tick_hz per tick, whatever the time warp,
+//!   so guidance filters and liveness are in mission seconds.
+
+use std::collections::BTreeMap;
+use std::sync::Arc;
+use std::time::Duration;
+
+use tokio::sync::{mpsc, oneshot, watch};
+use tokio_util::sync::CancellationToken;
+
+use super::error::ApiError;
+use crate::control::guidance::{Guidance, GuidanceGains, GuidanceMode};
+use crate::control::model::State;
+use crate::coverage::{Evaluation, Fleet, Options, RiskField, Vessel, evaluate};
+use crate::geometry::{Point, Region};
+use crate::protocol::{
+    ActuatorDocument, CommandDocument, CoordinatorMessage, CoverageDocument, GuidanceDocument,
+    MissionDocument, PoseDocument, RegionDocument, RiskDocument, RiskObjectDocument,
+    SnapshotDocument, VesselStatusDocument,
+};
+use crate::scenario::{Scenario, evaluation_document};
+
+/// The mission: what to cover and how.
+#[derive(Debug, Clone)]
+pub struct Mission {
+    pub region_doc: RegionDocument,
+    pub risk_doc: RiskDocument,
+    pub region: Region,
+    pub risk: RiskField,
+    pub actuator: ActuatorDocument,
+    pub guidance: GuidanceGains,
+    pub tick_hz: f64,
+}
+
+impl Mission {
+    /// The paper's scenario (region, risk, actuator), default guidance, 10 Hz.
+    pub fn paper() -> Mission {
+        let doc = crate::scenario::parse_document(crate::sim::PAPER_SCENARIO)
+            .expect("built-in scenario parses");
+        let scenario = Scenario::from_document(&doc).expect("built-in scenario is valid");
+        let v = scenario.fleet.vessels()[0];
+        let mut risk_doc = doc.risk.clone().expect("paper has risk");
+        for (i, o) in risk_doc.objects.iter_mut().enumerate() {
+            o.id.get_or_insert_with(|| format!("object-{}", i + 1));
+        }
+        Mission {
+            region_doc: doc.region.clone().expect("paper has a region"),
+            risk_doc,
+            region: scenario.region,
+            risk: scenario.risk,
+            actuator: ActuatorDocument {
+                k: v.k,
+                beta: v.beta,
+            },
+            guidance: GuidanceGains::default(),
+            tick_hz: 10.0,
+        }
+    }
+
+    pub fn document(&self) -> MissionDocument {
+        let g = &self.guidance;
+        MissionDocument {
+            region: self.region_doc.clone(),
+            risk: self.risk_doc.clone(),
+            actuator: self.actuator,
+            guidance: GuidanceDocument {
+                mode: g.mode.name().to_string(),
+                k_r1: g.k_r1,
+                k_r2: g.k_r2,
+                b1: g.b1,
+                k_u1: g.k_u1,
+                k_u2: g.k_u2,
+                b2: g.b2,
+                arrival_radius: g.arrival_radius,
+                max_speed: g.max_speed,
+                max_yaw_rate: g.max_yaw_rate,
+                filter_time: g.filter_time,
+            },
+            tick_hz: self.tick_hz,
+        }
+    }
+
+    /// The mission's risk objects, with ids.
+    pub fn objects(&self) -> &[RiskObjectDocument] {
+        &self.risk_doc.objects
+    }
+
+    pub fn mode(&self) -> GuidanceMode {
+        self.guidance.mode
+    }
+}
+
+/// What links and handlers ask of the tick task.
+#[derive(Debug)]
+pub enum Request {
+    /// A link said hello. The reply carries the tick rate.
+    Register {
+        id: String,
+        link: u64,
+        actuator: Option<ActuatorDocument>,
+        tx: mpsc::Sender<CoordinatorMessage>,
+        reply: oneshot::Sender<Result<f64, ApiError>>,
+    },
+    Pose {
+        id: String,
+        link: u64,
+        pose: PoseDocument,
+    },
+    /// A link closed.
+    Gone { id: String, link: u64 },
+}
+
+/// The newest state, for readers.
+#[derive(Debug, Clone)]
+pub struct Snapshot {
+    pub document: SnapshotDocument,
+    pub coverage: CoverageDocument,
+}
+
+/// Settings of the tick task.
+#[derive(Debug, Clone, Copy)]
+pub struct TickSettings {
+    /// Wall-clock speed-up (MOOS-IvP's time warp).
+    pub time_warp: f64,
+    /// A vessel silent longer than this (mission seconds) leaves the partition.
+    pub liveness: f64,
+}
+
+struct Link {
+    id: u64,
+    tx: mpsc::Sender<CoordinatorMessage>,
+}
+
+struct Entry {
+    actuator: ActuatorDocument,
+    link: Option<Link>,
+    pose: Option<PoseDocument>,
+    last_seen_tick: Option<u64>,
+    guidance: Guidance,
+    last_command: Option<CommandDocument>,
+}
+
+/// The tick task.
+pub struct Coordinator {
+    mission: Mission,
+    settings: TickSettings,
+    vessels: BTreeMap<String, Entry>,
+    tick: u64,
+    snapshot: watch::Sender<Arc<Snapshot>>,
+}
+
+impl Coordinator {
+    pub fn new(
+        mission: Mission,
+        settings: TickSettings,
+    ) -> (Coordinator, watch::Receiver<Arc<Snapshot>>) {
+        let empty = Arc::new(Snapshot {
+            document: SnapshotDocument {
+                tick: 0,
+                time: 0.0,
+                h: 0.0,
+                mission: mission.document(),
+                vessels: Vec::new(),
+            },
+            coverage: CoverageDocument {
+                tick: 0,
+                time: 0.0,
+                h: 0.0,
+                cells: Vec::new(),
+            },
+        });
+        let (tx, rx) = watch::channel(empty);
+        (
+            Coordinator {
+                mission,
+                settings,
+                vessels: BTreeMap::new(),
+                tick: 0,
+                snapshot: tx,
+            },
+            rx,
+        )
+    }
+
+    /// Runs until `shutdown`; then tells every vessel and returns.
+    pub async fn run(mut self, mut requests: mpsc::Receiver<Request>, shutdown: CancellationToken) {
+        let period =
+            Duration::from_secs_f64(1.0 / (self.mission.tick_hz * self.settings.time_warp));
+        let mut ticker = tokio::time::interval(period);
+        ticker.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Skip);
+        loop {
+            tokio::select! {
+                _ = shutdown.cancelled() => break,
+                _ = ticker.tick() => self.on_tick(),
+                request = requests.recv() => match request {
+                    Some(r) => self.on_request(r),
+                    None => break,
+                },
+            }
+        }
+        for entry in self.vessels.values() {
+            if let Some(link) = &entry.link {
+                let _ = link.tx.try_send(CoordinatorMessage::Error {
+                    code: ApiError::ShuttingDown.code().to_string(),
+                    message: ApiError::ShuttingDown.to_string(),
+                });
+            }
+        }
+    }
+
+    fn on_request(&mut self, request: Request) {
+        match request {
+            Request::Register {
+                id,
+                link,
+                actuator,
+                tx,
+                reply,
+            } => {
+                let actuator = actuator.unwrap_or(self.mission.actuator);
+                if !(actuator.k.is_finite() && actuator.k > 0.0) {
+                    let _ = reply.send(Err(ApiError::Invalid(
+                        "actuator.k: must be a finite number > 0".into(),
+                    )));
+                    return;
+                }
+                if actuator.beta != self.mission.actuator.beta {
+                    let _ = reply.send(Err(ApiError::Unsupported(format!(
+                        "actuator.beta: the mission's vessels share beta = {}; different beta give curved cell edges",
+                        self.mission.actuator.beta
+                    ))));
+                    return;
+                }
+                let gains = self.mission.guidance;
+                let entry = self.vessels.entry(id).or_insert_with(|| Entry {
+                    actuator,
+                    link: None,
+                    pose: None,
+                    last_seen_tick: None,
+                    guidance: Guidance::new(gains),
+                    last_command: None,
+                });
+                if let Some(old) = entry.link.take() {
+                    let _ = old.tx.try_send(CoordinatorMessage::Error {
+                        code: "replaced".into(),
+                        message: "another link for this vessel connected".into(),
+                    });
+                }
+                entry.actuator = actuator;
+                entry.link = Some(Link { id: link, tx });
+                let _ = reply.send(Ok(self.mission.tick_hz));
+            }
+            Request::Pose { id, link, pose } => {
+                if let Some(entry) = self.vessels.get_mut(&id)
+                    && entry.link.as_ref().is_some_and(|l| l.id == link)
+                {
+                    entry.pose = Some(pose);
+                    entry.last_seen_tick = Some(self.tick);
+                }
+            }
+            Request::Gone { id, link } => {
+                if let Some(entry) = self.vessels.get_mut(&id)
+                    && entry.link.as_ref().is_some_and(|l| l.id == link)
+                {
+                    entry.link = None;
+                }
+            }
+        }
+    }
+
+    fn is_live(&self, entry: &Entry) -> bool {
+        let window = (self.settings.liveness * self.mission.tick_hz).round() as u64;
+        entry.pose.is_some()
+            && entry
+                .last_seen_tick
+                .is_some_and(|t| self.tick - t <= window)
+    }
+
+    fn on_tick(&mut self) {
+        self.tick += 1;
+        let time = self.tick as f64 / self.mission.tick_hz;
+        let live: Vec<String> = self
+            .vessels
+            .iter()
+            .filter(|(_, e)| self.is_live(e))
+            .map(|(id, _)| id.clone())
+            .collect();
+        let evaluation = self.evaluate_live(&live);
+        if let Some(eval) = &evaluation {
+            for (i, id) in live.iter().enumerate() {
+                let entry = self.vessels.get_mut(id).expect("live vessels exist");
+                let pose = entry.pose.as_ref().expect("live vessels have a pose");
+                let state = State {
+                    x: pose.x,
+                    y: pose.y,
+                    psi: pose.psi,
+                    vel: crate::control::Vec3::new(pose.u, pose.v, pose.r),
+                };
+                let c = eval.cells[i].centroid;
+                let cmd = entry.guidance.update(time, &state, (c.x, c.y));
+                let doc = CommandDocument {
+                    tick: self.tick,
+                    u_d: cmd.u_d,
+                    r_d: cmd.r_d,
+                    u_d_dot: cmd.u_d_dot,
+                    r_d_dot: cmd.r_d_dot,
+                    centroid: [c.x, c.y],
+                    e: cmd.e,
+                    psi_e: cmd.psi_e,
+                };
+                if let Some(link) = &entry.link {
+                    // A link that cannot keep up misses this command; the next
+                    // one supersedes it anyway.
+                    let _ = link.tx.try_send(CoordinatorMessage::Command(doc.clone()));
+                }
+                entry.last_command = Some(doc);
+            }
+        }
+        self.publish(time, &live, evaluation.as_ref());
+    }
+
+    fn evaluate_live(&self, live: &[String]) -> Option<Evaluation> {
+        if live.is_empty() {
+            return None;
+        }
+        let vessels = live
+            .iter()
+            .map(|id| {
+                let e = &self.vessels[id];
+                let p = e.pose.as_ref().expect("live vessels have a pose");
+                Vessel {
+                    position: Point { x: p.x, y: p.y },
+                    k: e.actuator.k,
+                    beta: e.actuator.beta,
+                }
+            })
+            .collect();
+        let fleet = Fleet::new(vessels).ok()?;
+        Some(evaluate(
+            &self.mission.region,
+            &self.mission.risk,
+            &fleet,
+            &Options::default(),
+        ))
+    }
+
+    fn publish(&self, time: f64, live: &[String], evaluation: Option<&Evaluation>) {
+        let h = evaluation.map_or(0.0, |e| e.h);
+        let coverage = match evaluation {
+            Some(e) => {
+                let doc = evaluation_document(&self.mission.region, live, e);
+                CoverageDocument {
+                    tick: self.tick,
+                    time,
+                    h,
+                    cells: doc.cells,
+                }
+            }
+            None => CoverageDocument {
+                tick: self.tick,
+                time,
+                h,
+                cells: Vec::new(),
+            },
+        };
+        let vessels = self
+            .vessels
+            .iter()
+            .map(|(id, e)| {
+                let cell = coverage.cells.iter().find(|c| &c.id == id);
+                VesselStatusDocument {
+                    id: id.clone(),
+                    connected: e.link.is_some(),
+                    live: cell.is_some(),
+                    pose: e.pose.clone(),
+                    actuator: e.actuator,
+                    polygon: cell.and_then(|c| c.polygon.clone()),
+                    mass: cell.map_or(0.0, |c| c.mass),
+                    centroid: cell.map(|c| c.centroid),
+                    last_command: e.last_command.clone(),
+                    last_seen: e.last_seen_tick.map(|t| t as f64 / self.mission.tick_hz),
+                }
+            })
+            .collect();
+        let snapshot = Snapshot {
+            document: SnapshotDocument {
+                tick: self.tick,
+                time,
+                h,
+                mission: self.mission.document(),
+                vessels,
+            },
+            coverage,
+        };
+        self.snapshot.send_replace(Arc::new(snapshot));
+    }
+}

@@ -1,0 +1,218 @@
+//! WebSocket endpoints: the vessel link (hello / welcome / pose / command /
+//! error) and the read-only dashboard stream.
+//!
+//! A link task never touches the fleet: it validates frames and forwards them
+//! to the tick task, and writes whatever the tick task sends it. Fatal
+//! protocol errors (a pose before hello, a frame over 64 KiB, repeated
+//! garbage) close that link only.
+
+use std::sync::atomic::Ordering;
+use std::time::Duration;
+
+use axum::extract::State;
+use axum::extract::ws::{Message, Utf8Bytes, WebSocket, WebSocketUpgrade};
+use axum::response::Response;
+use futures_util::{SinkExt, StreamExt};
+use tokio::sync::{mpsc, oneshot};
+
+use super::AppState;
+use super::state::Request;
+use crate::protocol::{CoordinatorMessage, PoseDocument, VesselMessage};
+use crate::scenario::valid_id;
+
+/// Largest frame accepted on either socket.
+pub const MAX_FRAME: usize = 64 * 1024;
+/// Malformed frames tolerated on one link before it is closed.
+const MAX_GARBAGE: u32 = 5;
+
+fn text(msg: &CoordinatorMessage) -> Message {
+    Message::Text(Utf8Bytes::from(
+        serde_json::to_string(msg).expect("messages serialize"),
+    ))
+}
+
+fn error(code: &str, message: impl Into<String>) -> CoordinatorMessage {
+    CoordinatorMessage::Error {
+        code: code.to_string(),
+        message: message.into(),
+    }
+}
+
+pub async fn link(ws: WebSocketUpgrade, State(app): State<AppState>) -> Response {
+    let tracker = app.tracker.clone();
+    ws.max_message_size(MAX_FRAME)
+        .max_frame_size(MAX_FRAME)
+        .on_upgrade(move |socket| tracker.track_future(run_link(socket, app)))
+}
+
+fn finite(p: &PoseDocument) -> bool {
+    [p.t, p.x, p.y, p.psi, p.u, p.v, p.r]
+        .iter()
+        .all(|v| v.is_finite())
+}
+
+async fn run_link(socket: WebSocket, app: AppState) {
+    let (mut sink, mut stream) = socket.split();
+    // The first frame must be a hello.
+    let hello = tokio::select! {
+        _ = app.shutdown.cancelled() => return,
+        first = tokio::time::timeout(Duration::from_secs(10), stream.next()) => first,
+    };
+    let (id, actuator) = match hello {
+        Ok(Some(Ok(Message::Text(t)))) => match serde_json::from_str::<VesselMessage>(&t) {
+            Ok(VesselMessage::Hello {
+                vessel,
+                protocol,
+                actuator,
+            }) => {
+                if protocol != 1 {
+                    return refuse(
+                        sink,
+                        error(
+                            "unsupported",
+                            format!("protocol {protocol}: only 1 is spoken"),
+                        ),
+                    )
+                    .await;
+                }
+                if !valid_id(&vessel) {
+                    return refuse(
+                        sink,
+                        error("invalid", "vessel: must match [A-Za-z0-9_.-]{1,64}"),
+                    )
+                    .await;
+                }
+                (vessel, actuator)
+            }
+            Ok(VesselMessage::Pose(_)) => {
+                return refuse(sink, error("protocol", "a pose before hello")).await;
+            }
+            Err(e) => {
+                return refuse(sink, error("malformed", format!("expected hello: {e}"))).await;
+            }
+        },
+        _ => return,
+    };
+
+    let link = app.next_link.fetch_add(1, Ordering::Relaxed);
+    let (tx, mut rx) = mpsc::channel::<CoordinatorMessage>(16);
+    let (reply_tx, reply_rx) = oneshot::channel();
+    let registered = app
+        .requests
+        .send(Request::Register {
+            id: id.clone(),
+            link,
+            actuator,
+            tx,
+            reply: reply_tx,
+        })
+        .await
+        .is_ok();
+    let tick_hz = match (registered, reply_rx.await) {
+        (true, Ok(Ok(hz))) => hz,
+        (_, Ok(Err(e))) => return refuse(sink, error(e.code(), e.to_string())).await,
+        _ => {
+            return refuse(
+                sink,
+                error("shutting_down", "the coordinator is shutting down"),
+            )
+            .await;
+        }
+    };
+    if sink
+        .send(text(&CoordinatorMessage::Welcome {
+            vessel: id.clone(),
+            tick_hz,
+        }))
+        .await
+        .is_err()
+    {
+        return;
+    }
+
+    let mut garbage = 0;
+    loop {
+        tokio::select! {
+            _ = app.shutdown.cancelled() => {
+                let _ = sink.send(text(&error("shutting_down", "the coordinator is shutting down"))).await;
+                break;
+            }
+            out = rx.recv() => match out {
+                Some(msg) => {
+                    let fatal = matches!(&msg, CoordinatorMessage::Error { .. });
+                    if sink.send(text(&msg)).await.is_err() || fatal {
+                        break;
+                    }
+                }
+                None => break,
+            },
+            frame = stream.next() => match frame {
+                Some(Ok(Message::Text(t))) => match serde_json::from_str::<VesselMessage>(&t) {
+                    Ok(VesselMessage::Pose(pose)) if finite(&pose) => {
+                        if app.requests.send(Request::Pose { id: id.clone(), link, pose }).await.is_err() {
+                            break;
+                        }
+                    }
+                    Ok(VesselMessage::Pose(_)) => {
+                        let _ = sink.send(text(&error("invalid", "pose: every number must be finite"))).await;
+                    }
+                    Ok(VesselMessage::Hello { .. }) => {
+                        let _ = sink.send(text(&error("protocol", "hello twice on one link"))).await;
+                    }
+                    Err(e) => {
+                        garbage += 1;
+                        let fatal = garbage >= MAX_GARBAGE;
+                        let _ = sink.send(text(&error("malformed", format!("{e}")))).await;
+                        if fatal {
+                            break;
+                        }
+                    }
+                },
+                Some(Ok(Message::Close(_))) | None | Some(Err(_)) => break,
+                Some(Ok(_)) => {}
+            },
+        }
+    }
+    let _ = sink.close().await;
+    let _ = app.requests.send(Request::Gone { id, link }).await;
+}
+
+/// Sends a fatal error, then closes the socket properly.
+async fn refuse(mut sink: impl SinkExt<Message> + Unpin, message: CoordinatorMessage) {
+    let _ = sink.send(text(&message)).await;
+    let _ = sink.close().await;
+}
+
+/// `GET /api/v1/stream`: the newest snapshot on connect, then every change,
+/// at most 10 per second. A slow client skips to the newest one (a `watch`
+/// keeps only the latest), so nothing queues up.
+pub async fn stream(ws: WebSocketUpgrade, State(app): State<AppState>) -> Response {
+    let tracker = app.tracker.clone();
+    ws.max_message_size(MAX_FRAME)
+        .on_upgrade(move |socket| tracker.track_future(run_stream(socket, app)))
+}
+
+async fn run_stream(socket: WebSocket, app: AppState) {
+    let (mut sink, mut incoming) = socket.split();
+    let mut snapshots = app.snapshot.clone();
+    loop {
+        let snap = snapshots.borrow_and_update().clone();
+        let json = serde_json::to_string(&snap.document).expect("snapshots serialize");
+        if sink
+            .send(Message::Text(Utf8Bytes::from(json)))
+            .await
+            .is_err()
+        {
+            break;
+        }
+        tokio::time::sleep(Duration::from_millis(100)).await;
+        tokio::select! {
+            _ = app.shutdown.cancelled() => break,
+            changed = snapshots.changed() => if changed.is_err() { break },
+            frame = incoming.next() => match frame {
+                Some(Ok(Message::Close(_))) | None | Some(Err(_)) => break,
+                _ => {}
+            },
+        }
+    }
+}

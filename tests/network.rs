@@ -1,0 +1,344 @@
+//! The coordinator and agents over real sockets on loopback: the real server
+//! on port 0, real WebSocket and HTTP clients, time warp so that minutes of
+//! mission run in seconds.
+
+use std::time::{Duration, Instant};
+
+use futures_util::{SinkExt, StreamExt};
+use seacover::agent::{AgentConfig, paper_vessels, run_fleet};
+use seacover::control::model::VesselParams;
+use seacover::protocol::{CoverageDocument, VesselStatusDocument};
+use seacover::server::{ServeConfig, serve};
+use serde_json::{Value, json};
+use tokio::net::TcpListener;
+use tokio_tungstenite::tungstenite::Message;
+use tokio_util::sync::CancellationToken;
+
+const WARP: f64 = 20.0;
+
+struct Server {
+    addr: std::net::SocketAddr,
+    shutdown: CancellationToken,
+    task: tokio::task::JoinHandle<()>,
+}
+
+async fn start() -> Server {
+    let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let addr = listener.local_addr().unwrap();
+    let shutdown = CancellationToken::new();
+    let config = ServeConfig {
+        time_warp: WARP,
+        ..ServeConfig::default()
+    };
+    let token = shutdown.clone();
+    let task = tokio::spawn(async move { serve(listener, config, token).await.unwrap() });
+    Server {
+        addr,
+        shutdown,
+        task,
+    }
+}
+
+impl Server {
+    fn http(&self, path: &str) -> String {
+        format!("http://{}{path}", self.addr)
+    }
+    fn ws(&self) -> String {
+        format!("ws://{}/api/v1/vessels/link", self.addr)
+    }
+    async fn stop(self) {
+        self.shutdown.cancel();
+        tokio::time::timeout(Duration::from_secs(5), self.task)
+            .await
+            .unwrap()
+            .unwrap();
+    }
+}
+
+async fn vessels(s: &Server) -> Vec<VesselStatusDocument> {
+    reqwest::get(s.http("/api/v1/vessels"))
+        .await
+        .unwrap()
+        .json()
+        .await
+        .unwrap()
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_paper_fleet_converges_through_the_network() {
+    let server = start().await;
+    let agents = CancellationToken::new();
+    let config = AgentConfig {
+        url: server.ws(),
+        time_warp: WARP,
+        pose_hz: 20.0,
+        seed: 1,
+    };
+    let fleet = tokio::spawn(run_fleet(
+        config,
+        paper_vessels(VesselParams::PAPER),
+        agents.clone(),
+    ));
+
+    let started = Instant::now();
+    let mut e_max = f64::INFINITY;
+    while started.elapsed() < Duration::from_secs(60) {
+        tokio::time::sleep(Duration::from_millis(250)).await;
+        let vs = vessels(&server).await;
+        let coverage: CoverageDocument = reqwest::get(server.http("/api/v1/coverage"))
+            .await
+            .unwrap()
+            .json()
+            .await
+            .unwrap();
+        if vs.len() == 8 && vs.iter().all(|v| v.live) && coverage.time > 120.0 {
+            e_max = vs
+                .iter()
+                .map(|v| v.last_command.as_ref().unwrap().e)
+                .fold(0.0, f64::max);
+            if e_max < 1.0 {
+                assert!(coverage.h > 9000.0, "H = {}", coverage.h);
+                assert_eq!(coverage.cells.len(), 8);
+                break;
+            }
+        }
+    }
+    assert!(e_max < 1.0, "E_max {e_max} after {:?}", started.elapsed());
+    agents.cancel();
+    fleet.await.unwrap();
+    server.stop().await;
+}
+
+async fn hello(
+    url: String,
+    id: &'static str,
+) -> (
+    impl SinkExt<Message> + Unpin,
+    impl StreamExt<Item = Result<Message, tokio_tungstenite::tungstenite::Error>> + Unpin,
+) {
+    let (socket, _) = tokio_tungstenite::connect_async(url.as_str())
+        .await
+        .unwrap();
+    let (mut sink, mut stream) = socket.split();
+    let _ = sink
+        .send(Message::text(
+            json!({"type": "hello", "vessel": id, "protocol": 1}).to_string(),
+        ))
+        .await;
+    let welcome = next_json(&mut stream).await;
+    assert_eq!(welcome["type"], "welcome", "{welcome}");
+    assert_eq!(welcome["vessel"], id);
+    (sink, stream)
+}
+
+async fn next_json(
+    stream: &mut (impl StreamExt<Item = Result<Message, tokio_tungstenite::tungstenite::Error>> + Unpin),
+) -> Value {
+    loop {
+        match tokio::time::timeout(Duration::from_secs(5), stream.next())
+            .await
+            .expect("a frame in time")
+        {
+            Some(Ok(Message::Text(t))) => return serde_json::from_str(&t).unwrap(),
+            Some(Ok(Message::Close(_))) | None => return Value::Null,
+            Some(Ok(_)) => continue,
+            // The peer went away: as good as a close for these tests.
+            Some(Err(_)) => return Value::Null,
+        }
+    }
+}
+
+fn pose(x: f64, y: f64) -> Message {
+    Message::text(
+        json!({"type": "pose", "t": 0.0, "x": x, "y": y, "psi": 0.0, "u": 0.0, "v": 0.0, "r": 0.0})
+            .to_string(),
+    )
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn links_are_validated_replaced_and_expire() {
+    let server = start().await;
+
+    // A pose before hello closes the link with an error.
+    let (socket, _) = tokio_tungstenite::connect_async(server.ws()).await.unwrap();
+    let (mut sink, mut stream) = socket.split();
+    sink.send(pose(1.0, 1.0)).await.unwrap();
+    let e = next_json(&mut stream).await;
+    assert_eq!(e["type"], "error");
+    assert_eq!(e["code"], "protocol");
+
+    // Two vessels report; both get commands and share the region.
+    let (mut a, mut a_in) = hello(server.ws(), "a").await;
+    let (mut b, mut b_in) = hello(server.ws(), "b").await;
+    let _ = a.send(pose(20.0, 50.0)).await;
+    let _ = b.send(pose(80.0, 50.0)).await;
+    let cmd = next_json(&mut a_in).await;
+    assert_eq!(cmd["type"], "command", "{cmd}");
+    assert!(cmd["centroid"][0].as_f64().unwrap() < 50.0);
+    let _ = next_json(&mut b_in).await;
+
+    // Garbage is answered, not fatal at first.
+    let _ = a.send(Message::text("{not json")).await;
+    let mut saw_error = false;
+    for _ in 0..5 {
+        let m = next_json(&mut a_in).await;
+        if m["type"] == "error" {
+            assert_eq!(m["code"], "malformed");
+            saw_error = true;
+            break;
+        }
+    }
+    assert!(saw_error);
+
+    // A second link for "a" replaces the first, which is told and closed.
+    let (mut a2, _a2_in) = hello(server.ws(), "a").await;
+    let mut replaced = false;
+    for _ in 0..20 {
+        let m = next_json(&mut a_in).await;
+        if m.is_null() {
+            break;
+        }
+        if m["type"] == "error" && m["code"] == "replaced" {
+            replaced = true;
+        }
+    }
+    assert!(replaced);
+    let _ = a2.send(pose(20.0, 50.0)).await;
+
+    // "b" goes silent: after the 3 s liveness timeout (mission time) "a" owns
+    // the whole region.
+    let _ = b.send(Message::Close(None)).await;
+    let deadline = Instant::now() + Duration::from_secs(5);
+    loop {
+        let _ = a2.send(pose(20.0, 50.0)).await;
+        let cov: CoverageDocument = reqwest::get(server.http("/api/v1/coverage"))
+            .await
+            .unwrap()
+            .json()
+            .await
+            .unwrap();
+        if cov.cells.len() == 1 && cov.cells[0].id == "a" {
+            assert!((cov.cells[0].area - 10_000.0).abs() < 1e-6);
+            break;
+        }
+        assert!(
+            Instant::now() < deadline,
+            "b never left the partition: {:?}",
+            cov.cells.iter().map(|c| &c.id).collect::<Vec<_>>()
+        );
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+    let b_status: VesselStatusDocument = reqwest::get(server.http("/api/v1/vessels/b"))
+        .await
+        .unwrap()
+        .json()
+        .await
+        .unwrap();
+    assert!(!b_status.connected && !b_status.live);
+    server.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn rest_reads_and_what_if_evaluation() {
+    let server = start().await;
+    let client = reqwest::Client::new();
+    assert_eq!(
+        reqwest::get(server.http("/healthz"))
+            .await
+            .unwrap()
+            .text()
+            .await
+            .unwrap(),
+        "ok"
+    );
+    let mission: Value = reqwest::get(server.http("/api/v1/mission"))
+        .await
+        .unwrap()
+        .json()
+        .await
+        .unwrap();
+    assert_eq!(mission["tick_hz"], 10.0);
+    assert_eq!(mission["risk"]["objects"].as_array().unwrap().len(), 3);
+    assert_eq!(mission["actuator"]["beta"], 0.001);
+    let objects: Value = reqwest::get(server.http("/api/v1/risk-objects"))
+        .await
+        .unwrap()
+        .json()
+        .await
+        .unwrap();
+    assert_eq!(objects[0]["id"], "object-1");
+
+    // Region and risk come from the mission when omitted.
+    let r = client
+        .post(server.http("/api/v1/coverage/evaluate"))
+        .body(
+            json!({"vessels": [{"id": "a", "x": 30, "y": 30}, {"id": "b", "x": 70, "y": 70}]})
+                .to_string(),
+        )
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(r.status(), 200);
+    let eval: Value = r.json().await.unwrap();
+    assert_eq!(eval["cells"].as_array().unwrap().len(), 2);
+    let area: f64 = eval["cells"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c["area"].as_f64().unwrap())
+        .sum();
+    assert!((area - 10_000.0).abs() < 1e-6);
+
+    for (body, status, code) in [
+        ("{oops".to_string(), 400, "malformed"),
+        (json!({"vessels": []}).to_string(), 422, "invalid"),
+        (
+            json!({"vessels": [{"id": "a", "x": 1, "y": 1, "k": -1}]}).to_string(),
+            422,
+            "invalid",
+        ),
+    ] {
+        let r = client
+            .post(server.http("/api/v1/coverage/evaluate"))
+            .body(body)
+            .send()
+            .await
+            .unwrap();
+        assert_eq!(r.status(), status);
+        let e: Value = r.json().await.unwrap();
+        assert_eq!(e["error"]["code"], code);
+    }
+    let r = reqwest::get(server.http("/api/v1/vessels/nobody"))
+        .await
+        .unwrap();
+    assert_eq!(r.status(), 404);
+    let e: Value = r.json().await.unwrap();
+    assert_eq!(e["error"]["code"], "not_found");
+    server.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_stream_sends_a_snapshot_on_connect() {
+    let server = start().await;
+    let (socket, _) =
+        tokio_tungstenite::connect_async(format!("ws://{}/api/v1/stream", server.addr))
+            .await
+            .unwrap();
+    let (_sink, mut stream) = socket.split();
+    let first = next_json(&mut stream).await;
+    assert!(first["mission"]["region"]["polygon"].is_array());
+    let second = next_json(&mut stream).await;
+    assert!(second["tick"].as_u64().unwrap() > first["tick"].as_u64().unwrap());
+    server.stop().await;
+}
+
+#[tokio::test]
+async fn refuses_to_serve_publicly_without_a_token() {
+    let Ok(listener) = TcpListener::bind("0.0.0.0:0").await else {
+        return;
+    };
+    let err = serve(listener, ServeConfig::default(), CancellationToken::new())
+        .await
+        .unwrap_err();
+    assert!(err.to_string().contains("without a token"), "{err}");
+}
