@@ -342,3 +342,157 @@ async fn refuses_to_serve_publicly_without_a_token() {
         .unwrap_err();
     assert!(err.to_string().contains("without a token"), "{err}");
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn risk_objects_and_mission_writes() {
+    let server = start().await;
+    let c = reqwest::Client::new();
+    let objects = || async {
+        let v: Value = reqwest::get(server.http("/api/v1/risk-objects"))
+            .await
+            .unwrap()
+            .json()
+            .await
+            .unwrap();
+        v
+    };
+
+    // Create: 201 with the stored object and a fresh id.
+    let r = c
+        .post(server.http("/api/v1/risk-objects"))
+        .body(json!({"x": 40, "y": 40, "alpha": 5, "sigma": 8}).to_string())
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(r.status(), 201);
+    let created: Value = r.json().await.unwrap();
+    let id = created["id"].as_str().unwrap().to_string();
+    assert_eq!(id, "object-4");
+    assert_eq!(objects().await.as_array().unwrap().len(), 4);
+    let got: Value = reqwest::get(server.http(&format!("/api/v1/risk-objects/{id}")))
+        .await
+        .unwrap()
+        .json()
+        .await
+        .unwrap();
+    assert_eq!(got, created);
+
+    // Invalid values and duplicate ids are refused and change nothing.
+    let before = objects().await;
+    for (body, status, code) in [
+        (
+            json!({"x": 40, "y": 40, "alpha": 5, "sigma": 0}),
+            422,
+            "invalid",
+        ),
+        (
+            json!({"x": 40, "y": 40, "alpha": -5, "sigma": 3}),
+            422,
+            "invalid",
+        ),
+        (
+            json!({"id": "object-1", "x": 4, "y": 4, "alpha": 5, "sigma": 3}),
+            409,
+            "conflict",
+        ),
+        (
+            json!({"id": "bad id", "x": 4, "y": 4, "alpha": 5, "sigma": 3}),
+            422,
+            "invalid",
+        ),
+        (json!({"x": 4, "y": 4}), 400, "malformed"),
+    ] {
+        let r = c
+            .post(server.http("/api/v1/risk-objects"))
+            .body(body.to_string())
+            .send()
+            .await
+            .unwrap();
+        assert_eq!(r.status(), status, "{body}");
+        let e: Value = r.json().await.unwrap();
+        assert_eq!(e["error"]["code"], code);
+    }
+    assert_eq!(objects().await, before);
+
+    // Update and delete.
+    let r = c
+        .put(server.http(&format!("/api/v1/risk-objects/{id}")))
+        .body(json!({"x": 60, "y": 45, "alpha": 7, "sigma": 9}).to_string())
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(r.status(), 200);
+    let updated: Value = r.json().await.unwrap();
+    assert_eq!(updated["x"], 60.0);
+    assert_eq!(updated["id"], id.as_str());
+    let r = c
+        .delete(server.http(&format!("/api/v1/risk-objects/{id}")))
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(r.status(), 204);
+    let r = c
+        .delete(server.http(&format!("/api/v1/risk-objects/{id}")))
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(r.status(), 404);
+    assert_eq!(objects().await.as_array().unwrap().len(), 3);
+
+    // Base density and region.
+    let r = c
+        .put(server.http("/api/v1/mission/risk/base"))
+        .body(json!({"value": 0.3}).to_string())
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(r.status(), 200);
+    let m: Value = r.json().await.unwrap();
+    assert_eq!(m["risk"]["base"], 0.3);
+    let r = c
+        .put(server.http("/api/v1/mission/risk/base"))
+        .body(json!({"value": -1}).to_string())
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(r.status(), 422);
+    let bow_tie = json!({"polygon": [[0, 0], [100, 100], [100, 0], [0, 100]]});
+    let r = c
+        .put(server.http("/api/v1/mission/region"))
+        .body(bow_tie.to_string())
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(r.status(), 422);
+    let region = json!({
+        "polygon": [[0.0, 0.0], [200.0, 0.0], [200.0, 100.0], [0.0, 100.0]],
+        "holes": [[[90.0, 40.0], [110.0, 40.0], [110.0, 60.0], [90.0, 60.0]]]
+    });
+    let r = c
+        .put(server.http("/api/v1/mission/region"))
+        .body(region.to_string())
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(r.status(), 200);
+    let mission: Value = reqwest::get(server.http("/api/v1/mission"))
+        .await
+        .unwrap()
+        .json()
+        .await
+        .unwrap();
+    assert_eq!(mission["region"], region);
+    assert_eq!(mission["risk"]["base"], 0.3);
+    // The what-if evaluation now uses the new region.
+    let eval: Value = c
+        .post(server.http("/api/v1/coverage/evaluate"))
+        .body(json!({"vessels": [{"id": "a", "x": 50, "y": 50}]}).to_string())
+        .send()
+        .await
+        .unwrap()
+        .json()
+        .await
+        .unwrap();
+    assert!((eval["cells"][0]["area"].as_f64().unwrap() - 19_600.0).abs() < 1e-6);
+    server.stop().await;
+}

@@ -4,12 +4,18 @@
 use axum::Json;
 use axum::body::Bytes;
 use axum::extract::{Path, State};
+use axum::http::StatusCode;
+use axum::response::{IntoResponse, Response};
+use serde::Deserialize;
+use tokio::sync::oneshot;
 
 use super::AppState;
 use super::error::ApiError;
+use super::state::{ChangeResult, MissionChange, Request};
 use crate::coverage::Options;
 use crate::protocol::{
-    CoverageDocument, EvaluationDocument, MissionDocument, RiskObjectDocument, VesselStatusDocument,
+    CoverageDocument, EvaluationDocument, MissionDocument, RegionDocument, RiskObjectDocument,
+    VesselStatusDocument,
 };
 use crate::scenario::{Scenario, evaluation_document, parse_document};
 
@@ -69,4 +75,93 @@ pub async fn evaluate(
     .await
     .map_err(|_| ApiError::ShuttingDown)??;
     Ok(Json(result))
+}
+
+fn parse<T: serde::de::DeserializeOwned>(body: &Bytes) -> Result<T, ApiError> {
+    serde_json::from_slice(body).map_err(|e| ApiError::Malformed(e.to_string()))
+}
+
+/// Hands a change to the tick task and waits for its verdict.
+async fn change(app: &AppState, change: MissionChange) -> Result<ChangeResult, ApiError> {
+    let (reply, answer) = oneshot::channel();
+    app.requests
+        .send(Request::Change { change, reply })
+        .await
+        .map_err(|_| ApiError::ShuttingDown)?;
+    answer.await.map_err(|_| ApiError::ShuttingDown)?
+}
+
+fn respond(status: StatusCode, result: ChangeResult) -> Response {
+    match result {
+        ChangeResult::Mission(m) => (status, Json(m)).into_response(),
+        ChangeResult::Object(o) => (status, Json(o)).into_response(),
+        ChangeResult::Deleted => StatusCode::NO_CONTENT.into_response(),
+    }
+}
+
+pub async fn put_region(State(app): State<AppState>, body: Bytes) -> Result<Response, ApiError> {
+    let region: RegionDocument = parse(&body)?;
+    Ok(respond(
+        StatusCode::OK,
+        change(&app, MissionChange::Region(region)).await?,
+    ))
+}
+
+#[derive(Deserialize)]
+struct Value {
+    value: f64,
+}
+
+pub async fn put_base(State(app): State<AppState>, body: Bytes) -> Result<Response, ApiError> {
+    let v: Value = parse(&body)?;
+    Ok(respond(
+        StatusCode::OK,
+        change(&app, MissionChange::Base(v.value)).await?,
+    ))
+}
+
+pub async fn post_object(State(app): State<AppState>, body: Bytes) -> Result<Response, ApiError> {
+    let object: RiskObjectDocument = parse(&body)?;
+    Ok(respond(
+        StatusCode::CREATED,
+        change(&app, MissionChange::AddObject(object)).await?,
+    ))
+}
+
+pub async fn get_object(
+    State(app): State<AppState>,
+    Path(id): Path<String>,
+) -> Result<Json<RiskObjectDocument>, ApiError> {
+    let snap = app.snapshot.borrow().clone();
+    snap.document
+        .mission
+        .risk
+        .objects
+        .iter()
+        .find(|o| o.id.as_deref() == Some(id.as_str()))
+        .cloned()
+        .map(Json)
+        .ok_or_else(|| ApiError::NotFound(format!("no risk object {id:?}")))
+}
+
+pub async fn put_object(
+    State(app): State<AppState>,
+    Path(id): Path<String>,
+    body: Bytes,
+) -> Result<Response, ApiError> {
+    let object: RiskObjectDocument = parse(&body)?;
+    Ok(respond(
+        StatusCode::OK,
+        change(&app, MissionChange::PutObject(id, object)).await?,
+    ))
+}
+
+pub async fn delete_object(
+    State(app): State<AppState>,
+    Path(id): Path<String>,
+) -> Result<Response, ApiError> {
+    Ok(respond(
+        StatusCode::NO_CONTENT,
+        change(&app, MissionChange::DeleteObject(id)).await?,
+    ))
 }

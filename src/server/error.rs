@@ -18,6 +18,8 @@ pub enum ApiError {
     Invalid(String),
     #[error("{0}")]
     Unsupported(String),
+    #[error("{0}")]
+    Conflict(String),
     #[error("the coordinator is shutting down")]
     ShuttingDown,
 }
@@ -29,6 +31,7 @@ impl ApiError {
             ApiError::NotFound(_) => "not_found",
             ApiError::Invalid(_) => "invalid",
             ApiError::Unsupported(_) => "unsupported",
+            ApiError::Conflict(_) => "conflict",
             ApiError::ShuttingDown => "shutting_down",
         }
     }
@@ -38,6 +41,7 @@ impl ApiError {
             ApiError::Malformed(_) => StatusCode::BAD_REQUEST,
             ApiError::NotFound(_) => StatusCode::NOT_FOUND,
             ApiError::Invalid(_) | ApiError::Unsupported(_) => StatusCode::UNPROCESSABLE_ENTITY,
+            ApiError::Conflict(_) => StatusCode::CONFLICT,
             ApiError::ShuttingDown => StatusCode::SERVICE_UNAVAILABLE,
         }
     }

@@ -18,7 +18,7 @@ use std::time::Duration;
 
 use axum::Router;
 use axum::extract::DefaultBodyLimit;
-use axum::routing::{get, post};
+use axum::routing::{get, post, put};
 use tokio::net::TcpListener;
 use tokio::sync::{mpsc, watch};
 use tokio_util::sync::CancellationToken;
@@ -71,7 +71,18 @@ pub fn router(app: AppState) -> Router {
     Router::new()
         .route("/healthz", get(api::healthz))
         .route("/api/v1/mission", get(api::mission))
-        .route("/api/v1/risk-objects", get(api::risk_objects))
+        .route("/api/v1/mission/region", put(api::put_region))
+        .route("/api/v1/mission/risk/base", put(api::put_base))
+        .route(
+            "/api/v1/risk-objects",
+            get(api::risk_objects).post(api::post_object),
+        )
+        .route(
+            "/api/v1/risk-objects/{id}",
+            get(api::get_object)
+                .put(api::put_object)
+                .delete(api::delete_object),
+        )
         .route("/api/v1/vessels", get(api::vessels))
         .route("/api/v1/vessels/link", get(ws::link))
         .route("/api/v1/vessels/{id}", get(api::vessel))

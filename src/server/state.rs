@@ -117,6 +117,127 @@ pub enum Request {
     },
     /// A link closed.
     Gone { id: String, link: u64 },
+    /// An operator's change to the mission; the reply is the changed
+    /// document's new state.
+    Change {
+        change: MissionChange,
+        reply: oneshot::Sender<Result<ChangeResult, ApiError>>,
+    },
+}
+
+/// One write of the REST API.
+#[derive(Debug, Clone)]
+pub enum MissionChange {
+    Region(RegionDocument),
+    Base(f64),
+    AddObject(RiskObjectDocument),
+    PutObject(String, RiskObjectDocument),
+    DeleteObject(String),
+}
+
+/// What a change answers with.
+#[derive(Debug, Clone)]
+pub enum ChangeResult {
+    Mission(MissionDocument),
+    Object(RiskObjectDocument),
+    Deleted,
+}
+
+impl Mission {
+    /// The mission with `change` applied, validated as `evaluate` validates;
+    /// `self` is left untouched when it is rejected.
+    pub fn changed(&self, change: &MissionChange) -> Result<(Mission, ChangeResult), ApiError> {
+        let mut next = self.clone();
+        let result = match change {
+            MissionChange::Region(doc) => {
+                next.region = crate::scenario::region_from_document(doc)?;
+                next.region_doc = doc.clone();
+                None
+            }
+            MissionChange::Base(value) => {
+                next.risk_doc.base = *value;
+                None
+            }
+            MissionChange::AddObject(object) => {
+                let mut object = object.clone();
+                let id = match &object.id {
+                    Some(id) => {
+                        if !crate::scenario::valid_id(id) {
+                            return Err(ApiError::Invalid(
+                                "id: must match [A-Za-z0-9_.-]{1,64}".into(),
+                            ));
+                        }
+                        if next
+                            .risk_doc
+                            .objects
+                            .iter()
+                            .any(|o| o.id.as_deref() == Some(id))
+                        {
+                            return Err(ApiError::Conflict(format!(
+                                "a risk object {id:?} exists already"
+                            )));
+                        }
+                        id.clone()
+                    }
+                    None => (1..)
+                        .map(|n| format!("object-{n}"))
+                        .find(|c| {
+                            !next
+                                .risk_doc
+                                .objects
+                                .iter()
+                                .any(|o| o.id.as_deref() == Some(c))
+                        })
+                        .expect("an unused id exists"),
+                };
+                object.id = Some(id);
+                next.risk_doc.objects.push(object.clone());
+                Some(object)
+            }
+            MissionChange::PutObject(id, object) => {
+                let slot = next
+                    .risk_doc
+                    .objects
+                    .iter_mut()
+                    .find(|o| o.id.as_deref() == Some(id.as_str()))
+                    .ok_or_else(|| ApiError::NotFound(format!("no risk object {id:?}")))?;
+                *slot = RiskObjectDocument {
+                    id: Some(id.clone()),
+                    ..object.clone()
+                };
+                Some(slot.clone())
+            }
+            MissionChange::DeleteObject(id) => {
+                let before = next.risk_doc.objects.len();
+                next.risk_doc
+                    .objects
+                    .retain(|o| o.id.as_deref() != Some(id.as_str()));
+                if next.risk_doc.objects.len() == before {
+                    return Err(ApiError::NotFound(format!("no risk object {id:?}")));
+                }
+                None
+            }
+        };
+        next.risk = RiskField::new(
+            next.risk_doc.base,
+            next.risk_doc
+                .objects
+                .iter()
+                .map(|o| crate::coverage::RiskObject {
+                    center: Point { x: o.x, y: o.y },
+                    alpha: o.alpha,
+                    sigma: o.sigma,
+                })
+                .collect(),
+        )
+        .map_err(|e| ApiError::from(crate::scenario::ScenarioError::from(e)))?;
+        let answer = match (change, result) {
+            (MissionChange::DeleteObject(_), _) => ChangeResult::Deleted,
+            (_, Some(object)) => ChangeResult::Object(object),
+            (_, None) => ChangeResult::Mission(next.document()),
+        };
+        Ok((next, answer))
+    }
 }
 
 /// The newest state, for readers.
@@ -266,6 +387,25 @@ impl Coordinator {
                     entry.pose = Some(pose);
                     entry.last_seen_tick = Some(self.tick);
                 }
+            }
+            Request::Change { change, reply } => {
+                let outcome = self.mission.changed(&change).map(|(next, answer)| {
+                    self.mission = next;
+                    answer
+                });
+                if outcome.is_ok() {
+                    // Readers see the write at once, not at the next tick.
+                    let time = self.tick as f64 / self.mission.tick_hz;
+                    let live: Vec<String> = self
+                        .vessels
+                        .iter()
+                        .filter(|(_, e)| self.is_live(e))
+                        .map(|(id, _)| id.clone())
+                        .collect();
+                    let evaluation = self.evaluate_live(&live);
+                    self.publish(time, &live, evaluation.as_ref());
+                }
+                let _ = reply.send(outcome);
             }
             Request::Gone { id, link } => {
                 if let Some(entry) = self.vessels.get_mut(&id)
