@@ -200,7 +200,9 @@ async fn serve(bind: &str, time_warp: f64) -> anyhow::Result<()> {
         .with_context(|| format!("binding {bind}"))?;
     let token = tokio_util::sync::CancellationToken::new();
     cancel_on_signal(token.clone());
-    tracing::info!(addr = %listener.local_addr()?, "serving");
+    // The first line of output is the address, so scripts and tests can
+    // bind port 0 and find the server.
+    println!("seacover: serving on http://{}", listener.local_addr()?);
     let config = seacover::server::ServeConfig {
         time_warp,
         ..Default::default()

@@ -8,6 +8,7 @@
 
 pub mod api;
 pub mod error;
+pub mod metrics;
 pub mod state;
 pub mod ws;
 
@@ -70,6 +71,7 @@ pub enum ServeError {
 pub fn router(app: AppState) -> Router {
     Router::new()
         .route("/healthz", get(api::healthz))
+        .route("/metrics", get(metrics::render))
         .route("/api/v1/mission", get(api::mission))
         .route("/api/v1/mission/region", put(api::put_region))
         .route("/api/v1/mission/risk/base", put(api::put_base))
@@ -103,6 +105,7 @@ pub async fn serve(
     if !addr.ip().is_loopback() {
         return Err(ServeError::PublicWithoutToken(addr));
     }
+    metrics::handle();
     let (coordinator, snapshot) = Coordinator::new(
         config.mission,
         TickSettings {

@@ -318,10 +318,23 @@ impl Coordinator {
             Duration::from_secs_f64(1.0 / (self.mission.tick_hz * self.settings.time_warp));
         let mut ticker = tokio::time::interval(period);
         ticker.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Skip);
+        let mut last: Option<tokio::time::Instant> = None;
         loop {
             tokio::select! {
                 _ = shutdown.cancelled() => break,
-                _ = ticker.tick() => self.on_tick(),
+                now = ticker.tick() => {
+                    if let Some(prev) = last {
+                        // Ticks the interval skipped because one overran.
+                        let missed = ((now - prev).as_secs_f64() / period.as_secs_f64()).round() as u64;
+                        if missed > 1 {
+                            metrics::counter!(super::metrics::TICKS_SKIPPED).increment(missed - 1);
+                        }
+                    }
+                    last = Some(now);
+                    let started = std::time::Instant::now();
+                    self.on_tick();
+                    metrics::histogram!(super::metrics::TICK_SECONDS).record(started.elapsed().as_secs_f64());
+                }
                 request = requests.recv() => match request {
                     Some(r) => self.on_request(r),
                     None => break,
@@ -358,6 +371,15 @@ impl Coordinator {
                     let _ = reply.send(Err(ApiError::Unsupported(format!(
                         "actuator.beta: the mission's vessels share beta = {}; different beta give curved cell edges",
                         self.mission.actuator.beta
+                    ))));
+                    return;
+                }
+                if !self.vessels.contains_key(&id)
+                    && self.vessels.len() >= crate::coverage::fleet::MAX_VESSELS
+                {
+                    let _ = reply.send(Err(ApiError::Conflict(format!(
+                        "the mission already has {} vessels, the most it takes",
+                        crate::coverage::fleet::MAX_VESSELS
                     ))));
                     return;
                 }
@@ -460,12 +482,22 @@ impl Coordinator {
                 if let Some(link) = &entry.link {
                     // A link that cannot keep up misses this command; the next
                     // one supersedes it anyway.
-                    let _ = link.tx.try_send(CoordinatorMessage::Command(doc.clone()));
+                    if link
+                        .tx
+                        .try_send(CoordinatorMessage::Command(doc.clone()))
+                        .is_err()
+                    {
+                        metrics::counter!(super::metrics::MESSAGES_REJECTED, "reason" => "link_full").increment(1);
+                    }
                 }
                 entry.last_command = Some(doc);
             }
         }
         self.publish(time, &live, evaluation.as_ref());
+        let connected = self.vessels.values().filter(|e| e.link.is_some()).count();
+        metrics::gauge!(super::metrics::VESSELS_CONNECTED).set(connected as f64);
+        metrics::gauge!(super::metrics::VESSELS_LIVE).set(live.len() as f64);
+        metrics::gauge!(super::metrics::COVERAGE_H).set(evaluation.as_ref().map_or(0.0, |e| e.h));
     }
 
     fn evaluate_live(&self, live: &[String]) -> Option<Evaluation> {

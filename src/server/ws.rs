@@ -26,12 +26,19 @@ pub const MAX_FRAME: usize = 64 * 1024;
 const MAX_GARBAGE: u32 = 5;
 
 fn text(msg: &CoordinatorMessage) -> Message {
+    let kind = match msg {
+        CoordinatorMessage::Welcome { .. } => "welcome",
+        CoordinatorMessage::Command(_) => "command",
+        CoordinatorMessage::Error { .. } => "error",
+    };
+    metrics::counter!(super::metrics::MESSAGES_OUT, "kind" => kind).increment(1);
     Message::Text(Utf8Bytes::from(
         serde_json::to_string(msg).expect("messages serialize"),
     ))
 }
 
 fn error(code: &str, message: impl Into<String>) -> CoordinatorMessage {
+    metrics::counter!(super::metrics::MESSAGES_REJECTED, "reason" => code.to_string()).increment(1);
     CoordinatorMessage::Error {
         code: code.to_string(),
         message: message.into(),
@@ -149,6 +156,7 @@ async fn run_link(socket: WebSocket, app: AppState) {
             frame = stream.next() => match frame {
                 Some(Ok(Message::Text(t))) => match serde_json::from_str::<VesselMessage>(&t) {
                     Ok(VesselMessage::Pose(pose)) if finite(&pose) => {
+                        metrics::counter!(super::metrics::MESSAGES_IN, "kind" => "pose").increment(1);
                         if app.requests.send(Request::Pose { id: id.clone(), link, pose }).await.is_err() {
                             break;
                         }
