@@ -40,6 +40,9 @@ enum Command {
         /// Run the tick clock this many times faster than real time.
         #[arg(long, default_value_t = 1.0)]
         time_warp: f64,
+        /// Bearer token required for writes and vessel links.
+        #[arg(long, env = "SEACOVER_TOKEN", hide_env_values = true)]
+        token: Option<String>,
     },
     /// Run simulated vessels, each on its own link to a coordinator.
     Agent {
@@ -60,6 +63,9 @@ enum Command {
         time_warp: f64,
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        /// Bearer token of the coordinator.
+        #[arg(long, env = "SEACOVER_TOKEN", hide_env_values = true)]
+        token: Option<String>,
     },
     /// Coordinator and eight simulated vessels on loopback, paper scenario.
     Demo {
@@ -67,6 +73,9 @@ enum Command {
         bind: String,
         #[arg(long, default_value_t = 1.0)]
         time_warp: f64,
+        /// Bearer token (the demo's own vessels use it too).
+        #[arg(long, env = "SEACOVER_TOKEN", hide_env_values = true)]
+        token: Option<String>,
     },
     /// Simulate the closed loop (dynamics, observer, controller, guidance,
     /// coverage) in one process and write CSV, JSON and figures.
@@ -109,7 +118,11 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         Command::Evaluate { file, tolerance } => evaluate(file, tolerance),
-        Command::Serve { bind, time_warp } => report(runtime().block_on(serve(&bind, time_warp))),
+        Command::Serve {
+            bind,
+            time_warp,
+            token,
+        } => report(runtime().block_on(serve(&bind, time_warp, token))),
         Command::Agent {
             server,
             vessels,
@@ -117,8 +130,15 @@ fn main() -> ExitCode {
             preset,
             time_warp,
             seed,
-        } => report(runtime().block_on(agent(&server, vessels, id, &preset, time_warp, seed))),
-        Command::Demo { bind, time_warp } => report(runtime().block_on(demo(&bind, time_warp))),
+            token,
+        } => {
+            report(runtime().block_on(agent(&server, vessels, id, &preset, time_warp, seed, token)))
+        }
+        Command::Demo {
+            bind,
+            time_warp,
+            token,
+        } => report(runtime().block_on(demo(&bind, time_warp, token))),
         Command::Sim {
             scenario,
             duration,
@@ -192,22 +212,23 @@ fn check_warp(w: f64) -> anyhow::Result<()> {
     Ok(())
 }
 
-async fn serve(bind: &str, time_warp: f64) -> anyhow::Result<()> {
+async fn serve(bind: &str, time_warp: f64, token: Option<String>) -> anyhow::Result<()> {
     use anyhow::Context;
     check_warp(time_warp)?;
     let listener = tokio::net::TcpListener::bind(bind)
         .await
         .with_context(|| format!("binding {bind}"))?;
-    let token = tokio_util::sync::CancellationToken::new();
-    cancel_on_signal(token.clone());
+    let stop = tokio_util::sync::CancellationToken::new();
+    cancel_on_signal(stop.clone());
     // The first line of output is the address, so scripts and tests can
     // bind port 0 and find the server.
     println!("seacover: serving on http://{}", listener.local_addr()?);
     let config = seacover::server::ServeConfig {
         time_warp,
+        token,
         ..Default::default()
     };
-    seacover::server::serve(listener, config, token).await?;
+    seacover::server::serve(listener, config, stop).await?;
     Ok(())
 }
 
@@ -232,6 +253,7 @@ async fn agent(
     preset: &str,
     time_warp: f64,
     seed: u64,
+    token: Option<String>,
 ) -> anyhow::Result<()> {
     use anyhow::Context;
     use seacover::agent::{AgentConfig, paper_vessels, random_vessels, run_fleet};
@@ -274,14 +296,15 @@ async fn agent(
         time_warp,
         pose_hz: 20.0,
         seed,
+        token,
     };
-    let token = tokio_util::sync::CancellationToken::new();
-    cancel_on_signal(token.clone());
-    run_fleet(config, vessels, token).await;
+    let stop = tokio_util::sync::CancellationToken::new();
+    cancel_on_signal(stop.clone());
+    run_fleet(config, vessels, stop).await;
     Ok(())
 }
 
-async fn demo(bind: &str, time_warp: f64) -> anyhow::Result<()> {
+async fn demo(bind: &str, time_warp: f64, token: Option<String>) -> anyhow::Result<()> {
     use anyhow::Context;
     use seacover::agent::{AgentConfig, paper_vessels, run_fleet};
     use seacover::control::model::VesselParams;
@@ -290,23 +313,25 @@ async fn demo(bind: &str, time_warp: f64) -> anyhow::Result<()> {
         .await
         .with_context(|| format!("binding {bind}"))?;
     let addr = listener.local_addr()?;
-    let token = tokio_util::sync::CancellationToken::new();
-    cancel_on_signal(token.clone());
+    let stop = tokio_util::sync::CancellationToken::new();
+    cancel_on_signal(stop.clone());
     let config = seacover::server::ServeConfig {
         time_warp,
+        token: token.clone(),
         ..Default::default()
     };
-    let server = tokio::spawn(seacover::server::serve(listener, config, token.clone()));
+    let server = tokio::spawn(seacover::server::serve(listener, config, stop.clone()));
     let agents = AgentConfig {
         url: format!("ws://{addr}/api/v1/vessels/link"),
         time_warp,
         pose_hz: 20.0,
         seed: 1,
+        token,
     };
     let fleet = tokio::spawn(run_fleet(
         agents,
         paper_vessels(VesselParams::PAPER),
-        token.clone(),
+        stop.clone(),
     ));
     println!("seacover demo: coordinator on http://{addr}/ with 8 vessels (usv-1 … usv-8)");
     println!("  coverage: http://{addr}/api/v1/coverage   vessels: http://{addr}/api/v1/vessels");

@@ -23,11 +23,16 @@ struct Server {
 }
 
 async fn start() -> Server {
+    start_with(None).await
+}
+
+async fn start_with(token: Option<&str>) -> Server {
     let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
     let addr = listener.local_addr().unwrap();
     let shutdown = CancellationToken::new();
     let config = ServeConfig {
         time_warp: WARP,
+        token: token.map(str::to_string),
         ..ServeConfig::default()
     };
     let token = shutdown.clone();
@@ -73,6 +78,7 @@ async fn the_paper_fleet_converges_through_the_network() {
         time_warp: WARP,
         pose_hz: 20.0,
         seed: 1,
+        token: None,
     };
     let fleet = tokio::spawn(run_fleet(
         config,
@@ -494,5 +500,86 @@ async fn risk_objects_and_mission_writes() {
         .await
         .unwrap();
     assert!((eval["cells"][0]["area"].as_f64().unwrap() - 19_600.0).abs() < 1e-6);
+    server.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_token_guards_writes_and_links_but_not_reads() {
+    let server = start_with(Some("s3cret")).await;
+    let c = reqwest::Client::new();
+    let object = json!({"x": 40, "y": 40, "alpha": 5, "sigma": 8}).to_string();
+
+    let r = c
+        .post(server.http("/api/v1/risk-objects"))
+        .body(object.clone())
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(r.status(), 401);
+    let e: Value = r.json().await.unwrap();
+    assert_eq!(e["error"]["code"], "unauthorized");
+    let r = c
+        .post(server.http("/api/v1/risk-objects"))
+        .bearer_auth("wrong")
+        .body(object.clone())
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(r.status(), 401);
+    let objects: Value = reqwest::get(server.http("/api/v1/risk-objects"))
+        .await
+        .unwrap()
+        .json()
+        .await
+        .unwrap();
+    assert_eq!(
+        objects.as_array().unwrap().len(),
+        3,
+        "a refused write changed nothing"
+    );
+    let r = c
+        .post(server.http("/api/v1/risk-objects"))
+        .bearer_auth("s3cret")
+        .body(object)
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(r.status(), 201);
+
+    // Links: refused at the upgrade without the token; header or ?token= work.
+    let refused = tokio_tungstenite::connect_async(server.ws()).await;
+    match refused {
+        Err(tokio_tungstenite::tungstenite::Error::Http(resp)) => assert_eq!(resp.status(), 401),
+        other => panic!("expected a 401, got {:?}", other.map(|_| ())),
+    }
+    let (_socket, _) = tokio_tungstenite::connect_async(format!("{}?token=s3cret", server.ws()))
+        .await
+        .unwrap();
+    let agents = CancellationToken::new();
+    let config = AgentConfig {
+        url: server.ws(),
+        time_warp: WARP,
+        pose_hz: 20.0,
+        seed: 1,
+        token: Some("s3cret".into()),
+    };
+    let fleet = tokio::spawn(run_fleet(
+        config,
+        paper_vessels(VesselParams::PAPER)
+            .into_iter()
+            .take(2)
+            .collect(),
+        agents.clone(),
+    ));
+    let deadline = Instant::now() + Duration::from_secs(5);
+    while vessels(&server).await.iter().filter(|v| v.live).count() < 2 {
+        assert!(
+            Instant::now() < deadline,
+            "authenticated agents never became live"
+        );
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+    agents.cancel();
+    fleet.await.unwrap();
     server.stop().await;
 }

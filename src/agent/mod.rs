@@ -41,6 +41,8 @@ pub struct AgentConfig {
     pub time_warp: f64,
     pub pose_hz: f64,
     pub seed: u64,
+    /// Sent as `Authorization: Bearer TOKEN`.
+    pub token: Option<String>,
 }
 
 /// Starts from the built-in paper scenario (ids usv-1 … usv-8).
@@ -169,6 +171,22 @@ impl Onboard {
     }
 }
 
+fn link_request(
+    config: &AgentConfig,
+) -> Result<
+    tokio_tungstenite::tungstenite::handshake::client::Request,
+    tokio_tungstenite::tungstenite::Error,
+> {
+    use tokio_tungstenite::tungstenite::client::IntoClientRequest;
+    let mut request = config.url.as_str().into_client_request()?;
+    if let Some(token) = &config.token
+        && let Ok(value) = format!("Bearer {token}").parse()
+    {
+        request.headers_mut().insert("authorization", value);
+    }
+    Ok(request)
+}
+
 /// Runs every vessel until `shutdown`.
 pub async fn run_fleet(
     config: AgentConfig,
@@ -204,9 +222,16 @@ async fn run_vessel(
     let real_period = Duration::from_secs_f64(period / config.time_warp);
     let mut backoff = Duration::from_millis(100);
     while !shutdown.is_cancelled() {
+        let request = match link_request(&config) {
+            Ok(r) => r,
+            Err(e) => {
+                tracing::error!(url = %config.url, error = %e, "bad coordinator URL");
+                return;
+            }
+        };
         let connected = tokio::select! {
             _ = shutdown.cancelled() => return,
-            c = tokio_tungstenite::connect_async(config.url.as_str()) => c,
+            c = tokio_tungstenite::connect_async(request) => c,
         };
         let Ok((socket, _)) = connected else {
             // Keep sailing while disconnected.

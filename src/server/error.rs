@@ -20,6 +20,8 @@ pub enum ApiError {
     Unsupported(String),
     #[error("{0}")]
     Conflict(String),
+    #[error("a valid `Authorization: Bearer TOKEN` is required")]
+    Unauthorized,
     #[error("the coordinator is shutting down")]
     ShuttingDown,
 }
@@ -32,6 +34,7 @@ impl ApiError {
             ApiError::Invalid(_) => "invalid",
             ApiError::Unsupported(_) => "unsupported",
             ApiError::Conflict(_) => "conflict",
+            ApiError::Unauthorized => "unauthorized",
             ApiError::ShuttingDown => "shutting_down",
         }
     }
@@ -42,6 +45,7 @@ impl ApiError {
             ApiError::NotFound(_) => StatusCode::NOT_FOUND,
             ApiError::Invalid(_) | ApiError::Unsupported(_) => StatusCode::UNPROCESSABLE_ENTITY,
             ApiError::Conflict(_) => StatusCode::CONFLICT,
+            ApiError::Unauthorized => StatusCode::UNAUTHORIZED,
             ApiError::ShuttingDown => StatusCode::SERVICE_UNAVAILABLE,
         }
     }

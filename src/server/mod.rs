@@ -7,6 +7,7 @@
 //! tracked WebSocket task.
 
 pub mod api;
+pub mod auth;
 pub mod error;
 pub mod metrics;
 pub mod state;
@@ -30,6 +31,8 @@ use state::{Coordinator, Mission, Request, Snapshot, TickSettings};
 /// Shared by every handler; cheap to clone.
 #[derive(Clone)]
 pub struct AppState {
+    /// Required for writes and vessel links when set.
+    pub token: Option<Arc<str>>,
     pub requests: mpsc::Sender<Request>,
     pub snapshot: watch::Receiver<Arc<Snapshot>>,
     pub tracker: TaskTracker,
@@ -41,6 +44,9 @@ pub struct AppState {
 #[derive(Debug, Clone)]
 pub struct ServeConfig {
     pub mission: Mission,
+    /// Bearer token for writes and vessel links; without one only loopback
+    /// addresses are served.
+    pub token: Option<String>,
     pub time_warp: f64,
     /// Mission seconds of silence after which a vessel leaves the partition.
     pub liveness: f64,
@@ -50,6 +56,7 @@ impl Default for ServeConfig {
     fn default() -> Self {
         ServeConfig {
             mission: Mission::paper(),
+            token: None,
             time_warp: 1.0,
             liveness: 3.0,
         }
@@ -69,24 +76,27 @@ pub enum ServeError {
 
 /// Every route of SPEC §3 implemented so far.
 pub fn router(app: AppState) -> Router {
+    let writes = Router::new()
+        .route("/api/v1/mission/region", put(api::put_region))
+        .route("/api/v1/mission/risk/base", put(api::put_base))
+        .route("/api/v1/risk-objects", post(api::post_object))
+        .route(
+            "/api/v1/risk-objects/{id}",
+            put(api::put_object).delete(api::delete_object),
+        )
+        .route("/api/v1/vessels/link", get(ws::link))
+        .route_layer(axum::middleware::from_fn_with_state(
+            app.clone(),
+            auth::require_token,
+        ));
     Router::new()
+        .merge(writes)
         .route("/healthz", get(api::healthz))
         .route("/metrics", get(metrics::render))
         .route("/api/v1/mission", get(api::mission))
-        .route("/api/v1/mission/region", put(api::put_region))
-        .route("/api/v1/mission/risk/base", put(api::put_base))
-        .route(
-            "/api/v1/risk-objects",
-            get(api::risk_objects).post(api::post_object),
-        )
-        .route(
-            "/api/v1/risk-objects/{id}",
-            get(api::get_object)
-                .put(api::put_object)
-                .delete(api::delete_object),
-        )
+        .route("/api/v1/risk-objects", get(api::risk_objects))
+        .route("/api/v1/risk-objects/{id}", get(api::get_object))
         .route("/api/v1/vessels", get(api::vessels))
-        .route("/api/v1/vessels/link", get(ws::link))
         .route("/api/v1/vessels/{id}", get(api::vessel))
         .route("/api/v1/coverage", get(api::coverage))
         .route("/api/v1/coverage/evaluate", post(api::evaluate))
@@ -102,7 +112,7 @@ pub async fn serve(
     shutdown: CancellationToken,
 ) -> Result<(), ServeError> {
     let addr = listener.local_addr()?;
-    if !addr.ip().is_loopback() {
+    if !addr.ip().is_loopback() && config.token.is_none() {
         return Err(ServeError::PublicWithoutToken(addr));
     }
     metrics::handle();
@@ -117,6 +127,7 @@ pub async fn serve(
     let tracker = TaskTracker::new();
     let tick = tokio::spawn(coordinator.run(rx, shutdown.clone()));
     let app = AppState {
+        token: config.token.map(Arc::from),
         requests,
         snapshot,
         tracker: tracker.clone(),
