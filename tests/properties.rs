@@ -223,7 +223,9 @@ proptest! {
         let (_, _, _, slow) = c.run(&Options { tolerance: Tolerance::adaptive(1e-10) });
         prop_assert!((fast.h - slow.h).abs() <= 1e-8 * slow.h);
         for (a, b) in fast.cells.iter().zip(&slow.cells) {
-            prop_assert!((a.mass - b.mass).abs() <= 1e-8 * b.mass.max(1e-12 * slow.h), "{} vs {}", a.mass, b.mass);
+            // Relative for ordinary cells; for slivers, rounding of the geometry at
+            // the scale of the whole scenario (≈1e-12 of H) dominates.
+            prop_assert!((a.mass - b.mass).abs() <= 1e-8 * b.mass + 1e-12 * slow.h, "{} vs {}", a.mass, b.mass);
             if b.mass > 1e-9 * slow.h {
                 prop_assert!((a.centroid.x - b.centroid.x).abs() < 1e-6 && (a.centroid.y - b.centroid.y).abs() < 1e-6,
                     "{:?} vs {:?}", a.centroid, b.centroid);
@@ -261,7 +263,9 @@ proptest! {
         prop_assert!((a.h - b.h).abs() <= 1e-9 * a.h);
         let (s, co) = theta.sin_cos();
         for (x, y) in a.cells.iter().zip(&b.cells) {
-            prop_assert!((x.mass - y.mass).abs() <= 1e-9 * x.mass.max(1e-12 * a.h));
+            // As above: relative, plus a floor of 1e-12 H for sliver cells (a
+            // 1e-6 m² corner of a 1e4 m² region moves by 5e-9 of itself).
+            prop_assert!((x.mass - y.mass).abs() <= 1e-9 * x.mass + 1e-12 * a.h, "{} vs {}", x.mass, y.mass);
             prop_assert!((x.area - y.area).abs() <= 1e-8 * x.area.max(1.0));
             if x.mass > 1e-9 * a.h {
                 let m = p(co * x.centroid.x - s * x.centroid.y + tx, s * x.centroid.x + co * x.centroid.y + ty);
