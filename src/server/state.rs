@@ -418,12 +418,7 @@ impl Coordinator {
                 if outcome.is_ok() {
                     // Readers see the write at once, not at the next tick.
                     let time = self.tick as f64 / self.mission.tick_hz;
-                    let live: Vec<String> = self
-                        .vessels
-                        .iter()
-                        .filter(|(_, e)| self.is_live(e))
-                        .map(|(id, _)| id.clone())
-                        .collect();
+                    let live = self.live_ids();
                     let evaluation = self.evaluate_live(&live);
                     self.publish(time, &live, evaluation.as_ref());
                 }
@@ -447,15 +442,19 @@ impl Coordinator {
                 .is_some_and(|t| self.tick - t <= window)
     }
 
-    fn on_tick(&mut self) {
-        self.tick += 1;
-        let time = self.tick as f64 / self.mission.tick_hz;
-        let live: Vec<String> = self
-            .vessels
+    /// Ids of the vessels in the partition, in id order.
+    fn live_ids(&self) -> Vec<String> {
+        self.vessels
             .iter()
             .filter(|(_, e)| self.is_live(e))
             .map(|(id, _)| id.clone())
-            .collect();
+            .collect()
+    }
+
+    fn on_tick(&mut self) {
+        self.tick += 1;
+        let time = self.tick as f64 / self.mission.tick_hz;
+        let live = self.live_ids();
         let evaluation = self.evaluate_live(&live);
         if let Some(eval) = &evaluation {
             for (i, id) in live.iter().enumerate() {
