@@ -212,14 +212,23 @@ fn check_warp(w: f64) -> anyhow::Result<()> {
     Ok(())
 }
 
-async fn serve(bind: &str, time_warp: f64, token: Option<String>) -> anyhow::Result<()> {
+/// Binds `bind` and returns the listener with a token that ctrl-c or SIGTERM
+/// cancels.
+async fn listen(
+    bind: &str,
+) -> anyhow::Result<(tokio::net::TcpListener, tokio_util::sync::CancellationToken)> {
     use anyhow::Context;
-    check_warp(time_warp)?;
     let listener = tokio::net::TcpListener::bind(bind)
         .await
         .with_context(|| format!("binding {bind}"))?;
     let stop = tokio_util::sync::CancellationToken::new();
     cancel_on_signal(stop.clone());
+    Ok((listener, stop))
+}
+
+async fn serve(bind: &str, time_warp: f64, token: Option<String>) -> anyhow::Result<()> {
+    check_warp(time_warp)?;
+    let (listener, stop) = listen(bind).await?;
     // The first line of output is the address, so scripts and tests can
     // bind port 0 and find the server.
     println!("seacover: serving on http://{}", listener.local_addr()?);
@@ -305,16 +314,11 @@ async fn agent(
 }
 
 async fn demo(bind: &str, time_warp: f64, token: Option<String>) -> anyhow::Result<()> {
-    use anyhow::Context;
     use seacover::agent::{AgentConfig, paper_vessels, run_fleet};
     use seacover::control::model::VesselParams;
     check_warp(time_warp)?;
-    let listener = tokio::net::TcpListener::bind(bind)
-        .await
-        .with_context(|| format!("binding {bind}"))?;
+    let (listener, stop) = listen(bind).await?;
     let addr = listener.local_addr()?;
-    let stop = tokio_util::sync::CancellationToken::new();
-    cancel_on_signal(stop.clone());
     let config = seacover::server::ServeConfig {
         time_warp,
         token: token.clone(),

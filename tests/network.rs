@@ -60,13 +60,18 @@ impl Server {
     }
 }
 
-async fn vessels(s: &Server) -> Vec<VesselStatusDocument> {
-    reqwest::get(s.http("/api/v1/vessels"))
+/// `GET path` on the server, parsed.
+async fn get_json<T: serde::de::DeserializeOwned>(s: &Server, path: &str) -> T {
+    reqwest::get(s.http(path))
         .await
         .unwrap()
         .json()
         .await
         .unwrap()
+}
+
+async fn vessels(s: &Server) -> Vec<VesselStatusDocument> {
+    get_json(s, "/api/v1/vessels").await
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -91,12 +96,7 @@ async fn the_paper_fleet_converges_through_the_network() {
     while started.elapsed() < Duration::from_secs(60) {
         tokio::time::sleep(Duration::from_millis(250)).await;
         let vs = vessels(&server).await;
-        let coverage: CoverageDocument = reqwest::get(server.http("/api/v1/coverage"))
-            .await
-            .unwrap()
-            .json()
-            .await
-            .unwrap();
+        let coverage: CoverageDocument = get_json(&server, "/api/v1/coverage").await;
         if vs.len() == 8 && vs.iter().all(|v| v.live) && coverage.time > 120.0 {
             e_max = vs
                 .iter()
@@ -217,12 +217,7 @@ async fn links_are_validated_replaced_and_expire() {
     let deadline = Instant::now() + Duration::from_secs(5);
     loop {
         let _ = a2.send(pose(20.0, 50.0)).await;
-        let cov: CoverageDocument = reqwest::get(server.http("/api/v1/coverage"))
-            .await
-            .unwrap()
-            .json()
-            .await
-            .unwrap();
+        let cov: CoverageDocument = get_json(&server, "/api/v1/coverage").await;
         if cov.cells.len() == 1 && cov.cells[0].id == "a" {
             assert!((cov.cells[0].area - 10_000.0).abs() < 1e-6);
             break;
@@ -234,12 +229,7 @@ async fn links_are_validated_replaced_and_expire() {
         );
         tokio::time::sleep(Duration::from_millis(50)).await;
     }
-    let b_status: VesselStatusDocument = reqwest::get(server.http("/api/v1/vessels/b"))
-        .await
-        .unwrap()
-        .json()
-        .await
-        .unwrap();
+    let b_status: VesselStatusDocument = get_json(&server, "/api/v1/vessels/b").await;
     assert!(!b_status.connected && !b_status.live);
     server.stop().await;
 }
@@ -257,21 +247,11 @@ async fn rest_reads_and_what_if_evaluation() {
             .unwrap(),
         "ok"
     );
-    let mission: Value = reqwest::get(server.http("/api/v1/mission"))
-        .await
-        .unwrap()
-        .json()
-        .await
-        .unwrap();
+    let mission: Value = get_json(&server, "/api/v1/mission").await;
     assert_eq!(mission["tick_hz"], 10.0);
     assert_eq!(mission["risk"]["objects"].as_array().unwrap().len(), 3);
     assert_eq!(mission["actuator"]["beta"], 0.001);
-    let objects: Value = reqwest::get(server.http("/api/v1/risk-objects"))
-        .await
-        .unwrap()
-        .json()
-        .await
-        .unwrap();
+    let objects: Value = get_json(&server, "/api/v1/risk-objects").await;
     assert_eq!(objects[0]["id"], "object-1");
 
     // Region and risk come from the mission when omitted.
@@ -354,12 +334,7 @@ async fn risk_objects_and_mission_writes() {
     let server = start().await;
     let c = reqwest::Client::new();
     let objects = || async {
-        let v: Value = reqwest::get(server.http("/api/v1/risk-objects"))
-            .await
-            .unwrap()
-            .json()
-            .await
-            .unwrap();
+        let v: Value = get_json(&server, "/api/v1/risk-objects").await;
         v
     };
 
@@ -375,12 +350,7 @@ async fn risk_objects_and_mission_writes() {
     let id = created["id"].as_str().unwrap().to_string();
     assert_eq!(id, "object-4");
     assert_eq!(objects().await.as_array().unwrap().len(), 4);
-    let got: Value = reqwest::get(server.http(&format!("/api/v1/risk-objects/{id}")))
-        .await
-        .unwrap()
-        .json()
-        .await
-        .unwrap();
+    let got: Value = get_json(&server, &format!("/api/v1/risk-objects/{id}")).await;
     assert_eq!(got, created);
 
     // Invalid values and duplicate ids are refused and change nothing.
@@ -481,12 +451,7 @@ async fn risk_objects_and_mission_writes() {
         .await
         .unwrap();
     assert_eq!(r.status(), 200);
-    let mission: Value = reqwest::get(server.http("/api/v1/mission"))
-        .await
-        .unwrap()
-        .json()
-        .await
-        .unwrap();
+    let mission: Value = get_json(&server, "/api/v1/mission").await;
     assert_eq!(mission["region"], region);
     assert_eq!(mission["risk"]["base"], 0.3);
     // The what-if evaluation now uses the new region.
@@ -526,12 +491,7 @@ async fn a_token_guards_writes_and_links_but_not_reads() {
         .await
         .unwrap();
     assert_eq!(r.status(), 401);
-    let objects: Value = reqwest::get(server.http("/api/v1/risk-objects"))
-        .await
-        .unwrap()
-        .json()
-        .await
-        .unwrap();
+    let objects: Value = get_json(&server, "/api/v1/risk-objects").await;
     assert_eq!(
         objects.as_array().unwrap().len(),
         3,

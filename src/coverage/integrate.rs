@@ -62,8 +62,6 @@ pub struct Scaled {
     pub moment: Point,
     /// The true integrals are these times exp(log_scale).
     pub log_scale: f64,
-    /// Triangles used in the end.
-    pub triangles: usize,
 }
 
 /// Integration settings.
@@ -149,7 +147,6 @@ pub fn integrate(rings: &[Vec<Point>], terms: &[Gaussian], tol: Tolerance) -> Sc
         mass: 0.0,
         moment: Point { x: 0.0, y: 0.0 },
         log_scale: 0.0,
-        triangles: 0,
     };
     let rings: Vec<&Vec<Point>> = rings.iter().filter(|r| r.len() >= 3).collect();
     if rings.is_empty() || terms.is_empty() {
@@ -211,7 +208,6 @@ pub fn integrate(rings: &[Vec<Point>], terms: &[Gaussian], tol: Tolerance) -> Sc
                 y: sum[2],
             },
             log_scale: s,
-            triangles: 0,
         };
     }
 
@@ -307,7 +303,6 @@ pub fn integrate(rings: &[Vec<Point>], terms: &[Gaussian], tol: Tolerance) -> Sc
             y: sum[2],
         },
         log_scale: s,
-        triangles: heap.len(),
     }
 }
 

@@ -17,7 +17,7 @@
 use geo::kernels::{Kernel, Orientation, RobustKernel};
 use geo::{Intersects, Line, LineString, Polygon};
 use rstar::primitives::{GeomWithData, Line as RLine};
-use rstar::{AABB, RTree};
+use rstar::{AABB, RTree, RTreeObject};
 
 use super::{Point, bounds, dot, even_odd_contains, norm2, ring_signed_area, segment_closest};
 
@@ -303,7 +303,7 @@ fn check_boundary_crossings(
         let (ra, ia) = s.data;
         let la = s.geom();
         let a = Line::new(to_point(la.from), to_point(la.to));
-        for t in segments.locate_in_envelope_intersecting(&s.envelope_of()) {
+        for t in segments.locate_in_envelope_intersecting(&s.envelope()) {
             let (rb, ib) = t.data;
             if (ra, ia) >= (rb, ib) {
                 continue; // each unordered pair once, and never a segment with itself
@@ -337,17 +337,6 @@ fn check_boundary_crossings(
         }
     }
     Ok(())
-}
-
-trait EnvelopeOf {
-    fn envelope_of(&self) -> AABB<[f64; 2]>;
-}
-
-impl EnvelopeOf for Segment {
-    fn envelope_of(&self) -> AABB<[f64; 2]> {
-        use rstar::RTreeObject;
-        self.envelope()
-    }
 }
 
 /// Even–odd point-in-ring test (the boundary case is handled by the caller).
