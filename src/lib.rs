@@ -8,11 +8,13 @@
 //!   command line, and nothing else;
 //! - [`scenario`]: the shell that turns a scenario document into validated core
 //!   types and an evaluation back into its document.
+//! - [`load`]: `seacover bench load`, a load benchmark of a running coordinator.
 
 pub mod agent;
 pub mod control;
 pub mod coverage;
 pub mod geometry;
+pub mod load;
 pub mod protocol;
 pub mod scenario;
 pub mod server;

@@ -16,8 +16,19 @@ use seacover::protocol::{ErrorDetail, ErrorDocument};
     about = "Coverage control for fleets of unmanned surface vessels"
 )]
 struct Cli {
+    /// Log lines as text or as JSON objects (one per line); the level comes
+    /// from RUST_LOG (default `info` for serve, agent and demo, `warn`
+    /// otherwise).
+    #[arg(long, global = true, value_enum, default_value = "text")]
+    log_format: LogFormat,
     #[command(subcommand)]
     command: Command,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum LogFormat {
+    Text,
+    Json,
 }
 
 #[derive(Subcommand)]
@@ -43,6 +54,14 @@ enum Command {
         /// Bearer token required for writes and vessel links.
         #[arg(long, env = "SEACOVER_TOKEN", hide_env_values = true)]
         token: Option<String>,
+        /// Where the mission is stored (created when missing).
+        #[arg(long, default_value = "seacover-data")]
+        data_dir: PathBuf,
+        /// TOML file with the mission (region, risk, actuator, guidance,
+        /// tick rate) and server settings; it seeds a new data directory only
+        /// (see examples/seacover.toml).
+        #[arg(long)]
+        config: Option<PathBuf>,
     },
     /// Run simulated vessels, each on its own link to a coordinator.
     Agent {
@@ -77,6 +96,11 @@ enum Command {
         #[arg(long, env = "SEACOVER_TOKEN", hide_env_values = true)]
         token: Option<String>,
     },
+    /// Benchmarks against a running coordinator.
+    Bench {
+        #[command(subcommand)]
+        kind: BenchKind,
+    },
     /// Simulate the closed loop (dynamics, observer, controller, guidance,
     /// coverage) in one process and write CSV, JSON and figures.
     Sim {
@@ -107,22 +131,63 @@ enum Command {
     },
 }
 
+#[derive(Subcommand)]
+enum BenchKind {
+    /// Open N vessel links to a coordinator, report poses at a rate, and
+    /// measure links held, commands, latency and the coordinator's CPU and
+    /// memory (SPEC §4 targets).
+    Load {
+        /// Coordinator base URL, e.g. http://127.0.0.1:8090.
+        #[arg(long)]
+        server: String,
+        #[arg(long, default_value_t = 1000)]
+        vessels: usize,
+        /// Poses per second per vessel.
+        #[arg(long, default_value_t = 20.0)]
+        rate: f64,
+        /// Measured seconds.
+        #[arg(long, default_value_t = 30.0)]
+        duration: f64,
+        /// Seconds of settling after every link has its first command.
+        #[arg(long, default_value_t = 2.0)]
+        warmup: f64,
+        /// The coordinator's --time-warp.
+        #[arg(long, default_value_t = 1.0)]
+        time_warp: f64,
+        /// Seed of the start positions.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Bearer token of the coordinator.
+        #[arg(long, env = "SEACOVER_TOKEN", hide_env_values = true)]
+        token: Option<String>,
+        /// Print the report as JSON instead of a table.
+        #[arg(long)]
+        json: bool,
+    },
+}
+
 fn main() -> ExitCode {
-    tracing_subscriber::fmt()
-        .with_env_filter(
-            tracing_subscriber::EnvFilter::try_from_default_env()
-                .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn")),
-        )
-        .with_writer(std::io::stderr)
-        .init();
     let cli = Cli::parse();
+    let quiet = matches!(cli.command, Command::Evaluate { .. } | Command::Sim { .. });
+    let filter = tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| {
+        tracing_subscriber::EnvFilter::new(if quiet { "warn" } else { "info" })
+    });
+    let logs = tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr);
+    match cli.log_format {
+        LogFormat::Text => logs.init(),
+        LogFormat::Json => logs.json().init(),
+    }
     match cli.command {
         Command::Evaluate { file, tolerance } => evaluate(file, tolerance),
         Command::Serve {
             bind,
             time_warp,
             token,
-        } => report(runtime().block_on(serve(&bind, time_warp, token))),
+            data_dir,
+            config,
+        } => report(runtime().block_on(serve(&bind, time_warp, token, data_dir, config))),
         Command::Agent {
             server,
             vessels,
@@ -139,6 +204,25 @@ fn main() -> ExitCode {
             time_warp,
             token,
         } => report(runtime().block_on(demo(&bind, time_warp, token))),
+        Command::Bench {
+            kind:
+                BenchKind::Load {
+                    server,
+                    vessels,
+                    rate,
+                    duration,
+                    warmup,
+                    time_warp,
+                    seed,
+                    token,
+                    json,
+                },
+        } => {
+            let run = bench_load(
+                server, vessels, rate, duration, warmup, time_warp, seed, token, json,
+            );
+            report(runtime().block_on(run))
+        }
         Command::Sim {
             scenario,
             duration,
@@ -226,16 +310,30 @@ async fn listen(
     Ok((listener, stop))
 }
 
-async fn serve(bind: &str, time_warp: f64, token: Option<String>) -> anyhow::Result<()> {
+async fn serve(
+    bind: &str,
+    time_warp: f64,
+    token: Option<String>,
+    data_dir: PathBuf,
+    config: Option<PathBuf>,
+) -> anyhow::Result<()> {
     check_warp(time_warp)?;
+    let settings = match &config {
+        Some(path) => seacover::server::config::Settings::load(path)?,
+        None => Default::default(),
+    };
     let (listener, stop) = listen(bind).await?;
     // The first line of output is the address, so scripts and tests can
     // bind port 0 and find the server.
     println!("seacover: serving on http://{}", listener.local_addr()?);
     let config = seacover::server::ServeConfig {
+        mission: settings.mission,
         time_warp,
         token,
-        ..Default::default()
+        liveness: settings.liveness,
+        data_dir: Some(data_dir),
+        write_rate: settings.write_rate,
+        write_burst: settings.write_burst,
     };
     seacover::server::serve(listener, config, stop).await?;
     Ok(())
@@ -342,6 +440,42 @@ async fn demo(bind: &str, time_warp: f64, token: Option<String>) -> anyhow::Resu
     println!("  stop with ctrl-c");
     fleet.await?;
     server.await??;
+    Ok(())
+}
+
+#[allow(clippy::too_many_arguments)]
+async fn bench_load(
+    server: String,
+    vessels: usize,
+    rate: f64,
+    duration: f64,
+    warmup: f64,
+    time_warp: f64,
+    seed: u64,
+    token: Option<String>,
+    json: bool,
+) -> anyhow::Result<()> {
+    let seconds = |name: &str, s: f64| {
+        anyhow::ensure!(
+            s.is_finite() && (0.0..=86_400.0).contains(&s),
+            "--{name} must be in [0, 86400] s"
+        );
+        Ok(std::time::Duration::from_secs_f64(s))
+    };
+    let mut config =
+        seacover::load::LoadConfig::new(server, vessels, rate, seconds("duration", duration)?);
+    config.warmup = seconds("warmup", warmup)?;
+    config.time_warp = time_warp;
+    config.seed = seed;
+    config.token = token;
+    let stop = tokio_util::sync::CancellationToken::new();
+    cancel_on_signal(stop.clone());
+    let report = seacover::load::run(config, stop).await?;
+    if json {
+        println!("{}", report.to_json());
+    } else {
+        print!("{report}");
+    }
     Ok(())
 }
 

@@ -2,15 +2,26 @@
 //! (SPEC §3), and nothing else: no validation, no behaviour. Validation lives in
 //! [`crate::scenario`], so the same document is checked the same way by the CLI
 //! and by the server.
+//!
+//! The types also derive their schemas: `utoipa::ToSchema` for the OpenAPI
+//! document (`api/openapi.json`) and `schemars::JsonSchema` for the vessel
+//! link's JSON Schema (`api/vessel-link.schema.json`); both read the serde
+//! attributes, so the schemas follow the JSON that serde accepts and emits.
+//! Schemas describe shapes only: value rules (ids matching
+//! `[A-Za-z0-9_.-]{1,64}`, σ > 0, simple polygons, …) are checked by
+//! [`crate::scenario`] and answered with `invalid`.
 
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
+use utoipa::ToSchema;
 
 /// `[x, y]` in metres.
 pub type XY = [f64; 2];
 
 /// A scenario document (`examples/*.json`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
 pub struct ScenarioDocument {
+    /// A label; ignored by the engine.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub name: Option<String>,
     /// Omitted: taken from the current mission (server) or rejected (CLI).
@@ -23,142 +34,185 @@ pub struct ScenarioDocument {
 }
 
 /// The task region: a simple polygon with optional holes.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
 pub struct RegionDocument {
+    /// Outer ring `[[x, y], …]` in metres, without the closing vertex.
+    #[schema(schema_with = schema::ring)]
     pub polygon: Vec<XY>,
+    /// Islands: rings strictly inside the polygon and disjoint.
     #[serde(default)]
+    #[schema(schema_with = schema::rings)]
     pub holes: Vec<Vec<XY>>,
 }
 
 /// Risk density: base φ0 plus Gaussian objects.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
 pub struct RiskDocument {
+    /// φ0 ≥ 0, the density everywhere in the region.
     pub base: f64,
     #[serde(default)]
     pub objects: Vec<RiskObjectDocument>,
 }
 
-/// One Gaussian risk object.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// One Gaussian risk object: α exp(−‖q − (x, y)‖² / 2σ²).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
 pub struct RiskObjectDocument {
+    /// `[A-Za-z0-9_.-]{1,64}`; the server assigns one when it is omitted.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub id: Option<String>,
     pub x: f64,
     pub y: f64,
     pub alpha: f64,
+    /// Width σ > 0 [m].
     pub sigma: f64,
 }
 
 /// One vessel of a scenario.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
 pub struct VesselDocument {
+    /// `[A-Za-z0-9_.-]{1,64}`, unique in the document.
     pub id: String,
     pub x: f64,
     pub y: f64,
+    /// Heading [rad].
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub psi: Option<f64>,
+    /// Actuator strength; default 0.5.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub k: Option<f64>,
+    /// Actuator decay [1/m²]; default 0.001, shared by every vessel.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub beta: Option<f64>,
 }
 
 /// Result of `evaluate`: cells in the order of the request's vessels.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
 pub struct EvaluationDocument {
+    /// The coverage metric H(P) = Σ M_i.
     #[serde(rename = "H")]
     pub h: f64,
     pub cells: Vec<CellDocument>,
 }
 
 /// Figures of one cell.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
 pub struct CellDocument {
     pub id: String,
+    /// M_i = ∫_{V_i} f_i Φ.
     pub mass: f64,
+    /// C_i; the nearest point of the region for an empty cell.
+    #[schema(schema_with = schema::xy)]
     pub centroid: XY,
+    /// [m²].
     pub area: f64,
     /// Outer ring of the cell (of its largest piece when it has several),
     /// counter-clockwise, without the closing vertex; `null` when empty.
+    #[schema(schema_with = schema::ring_or_null, required = true)]
     pub polygon: Option<Vec<XY>>,
     /// Every piece with its holes, present only when the cell is not one
     /// simple polygon (several pieces, or a hole of Q inside it).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub pieces: Vec<RegionDocument>,
+    /// ∂H/∂p_i = 2β M_i (C_i − p_i).
+    #[schema(schema_with = schema::xy)]
     pub gradient: XY,
 }
 
 /// `{"error": {"code", "message"}}`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
 pub struct ErrorDocument {
     pub error: ErrorDetail,
 }
 
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// What went wrong.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
 pub struct ErrorDetail {
+    /// Stable machine code: `malformed`, `invalid`, `unsupported`,
+    /// `not_found`, `conflict`, `unauthorized`, `shutting_down`, ….
     pub code: String,
+    /// For people; starts with the offending field when there is one.
     pub message: String,
 }
 
 /// Actuator of a vessel (f_i = k exp(−β‖q − p_i‖²)).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
 pub struct ActuatorDocument {
     pub k: f64,
     pub beta: f64,
 }
 
 /// Vessel → coordinator on `/api/v1/vessels/link`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
 #[serde(tag = "type", rename_all = "snake_case")]
 pub enum VesselMessage {
+    /// The first frame of every link.
     Hello {
+        /// The vessel's id, `[A-Za-z0-9_.-]{1,64}`.
         vessel: String,
+        /// Protocol version; only 1 is spoken.
         protocol: u32,
+        /// Omitted: the mission's actuator.
         #[serde(default, skip_serializing_if = "Option::is_none")]
         actuator: Option<ActuatorDocument>,
     },
+    /// A pose report.
     Pose(PoseDocument),
 }
 
 /// A pose report: the vessel's own clock, pose and body velocities.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
 pub struct PoseDocument {
+    /// The vessel's clock [s].
     pub t: f64,
     pub x: f64,
     pub y: f64,
+    /// Heading [rad].
     pub psi: f64,
+    /// Surge velocity [m/s].
     pub u: f64,
+    /// Sway velocity [m/s].
     pub v: f64,
+    /// Yaw rate [rad/s].
     pub r: f64,
+    /// Free-form; the coordinator does not interpret it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub telemetry: Option<serde_json::Value>,
 }
 
 /// Coordinator → vessel.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
 #[serde(tag = "type", rename_all = "snake_case")]
 pub enum CoordinatorMessage {
+    /// The answer to a valid hello.
     Welcome { vessel: String, tick_hz: f64 },
+    /// One per tick per live vessel.
     Command(CommandDocument),
+    /// A rejected frame; fatal ones (protocol, shutting_down, …) close the link.
     Error { code: String, message: String },
 }
 
 /// One command, computed from the newest pose of every live vessel.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
 pub struct CommandDocument {
     pub tick: u64,
+    /// Desired surge velocity [m/s].
     pub u_d: f64,
+    /// Desired yaw rate [rad/s].
     pub r_d: f64,
     pub u_d_dot: f64,
     pub r_d_dot: f64,
+    /// The vessel's cell centroid, its goal.
+    #[schema(schema_with = schema::xy)]
     pub centroid: XY,
+    /// Distance to the centroid [m].
     #[serde(rename = "E")]
     pub e: f64,
+    /// Heading error towards the centroid [rad].
     pub psi_e: f64,
 }
 
 /// `GET /api/v1/mission`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
 pub struct MissionDocument {
     pub region: RegionDocument,
     pub risk: RiskDocument,
@@ -168,8 +222,9 @@ pub struct MissionDocument {
 }
 
 /// Guidance mode and gains of a mission.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
 pub struct GuidanceDocument {
+    /// `course` or `paper`.
     pub mode: String,
     pub k_r1: f64,
     pub k_r2: f64,
@@ -184,24 +239,32 @@ pub struct GuidanceDocument {
 }
 
 /// One vessel as the coordinator sees it.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
 pub struct VesselStatusDocument {
     pub id: String,
+    /// A link is open.
     pub connected: bool,
     /// Within the liveness timeout, hence in the partition.
     pub live: bool,
+    /// The newest pose; `null` before the first.
+    #[schema(required = true)]
     pub pose: Option<PoseDocument>,
     pub actuator: ActuatorDocument,
+    /// The cell's outer ring; `null` when the vessel has no cell.
+    #[schema(schema_with = schema::ring_or_null, required = true)]
     pub polygon: Option<Vec<XY>>,
     pub mass: f64,
+    #[schema(schema_with = schema::xy_or_null, required = true)]
     pub centroid: Option<XY>,
+    #[schema(required = true)]
     pub last_command: Option<CommandDocument>,
     /// Mission time of the newest pose [s].
+    #[schema(required = true)]
     pub last_seen: Option<f64>,
 }
 
 /// `GET /api/v1/coverage`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
 pub struct CoverageDocument {
     pub tick: u64,
     /// Mission time [s].
@@ -212,12 +275,57 @@ pub struct CoverageDocument {
 }
 
 /// What the dashboard stream sends.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
 pub struct SnapshotDocument {
     pub tick: u64,
+    /// Mission time [s].
     pub time: f64,
     #[serde(rename = "H")]
     pub h: f64,
     pub mission: MissionDocument,
     pub vessels: Vec<VesselStatusDocument>,
+}
+
+/// OpenAPI schemas of the `[x, y]` shapes. utoipa reads field types by name
+/// and cannot see through the [`XY`] alias (schemars can), so these spell
+/// out what serde accepts for `[f64; 2]`: exactly two numbers.
+mod schema {
+    use utoipa::openapi::schema::{ArrayBuilder, ObjectBuilder, SchemaType, Type};
+    use utoipa::openapi::{KnownFormat, SchemaFormat};
+
+    fn point(types: SchemaType) -> ArrayBuilder {
+        ArrayBuilder::new()
+            .schema_type(types)
+            .items(
+                ObjectBuilder::new()
+                    .schema_type(Type::Number)
+                    .format(Some(SchemaFormat::KnownFormat(KnownFormat::Double))),
+            )
+            .min_items(Some(2))
+            .max_items(Some(2))
+    }
+
+    fn list(item: ArrayBuilder, types: SchemaType) -> ArrayBuilder {
+        ArrayBuilder::new().schema_type(types).items(item)
+    }
+
+    pub fn xy() -> ArrayBuilder {
+        point(Type::Array.into())
+    }
+
+    pub fn xy_or_null() -> ArrayBuilder {
+        point([Type::Array, Type::Null].into_iter().collect())
+    }
+
+    pub fn ring() -> ArrayBuilder {
+        list(xy(), Type::Array.into())
+    }
+
+    pub fn ring_or_null() -> ArrayBuilder {
+        list(xy(), [Type::Array, Type::Null].into_iter().collect())
+    }
+
+    pub fn rings() -> ArrayBuilder {
+        list(ring(), Type::Array.into())
+    }
 }

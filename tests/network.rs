@@ -27,14 +27,18 @@ async fn start() -> Server {
 }
 
 async fn start_with(token: Option<&str>) -> Server {
-    let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
-    let addr = listener.local_addr().unwrap();
-    let shutdown = CancellationToken::new();
-    let config = ServeConfig {
+    start_config(ServeConfig {
         time_warp: WARP,
         token: token.map(str::to_string),
         ..ServeConfig::default()
-    };
+    })
+    .await
+}
+
+async fn start_config(config: ServeConfig) -> Server {
+    let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let addr = listener.local_addr().unwrap();
+    let shutdown = CancellationToken::new();
     let token = shutdown.clone();
     let task = tokio::spawn(async move { serve(listener, config, token).await.unwrap() });
     Server {
@@ -541,5 +545,114 @@ async fn a_token_guards_writes_and_links_but_not_reads() {
     }
     agents.cancel();
     fleet.await.unwrap();
+    server.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn writes_are_rate_limited_and_bodies_bounded() {
+    let server = start_config(ServeConfig {
+        write_rate: 2,
+        write_burst: 5,
+        ..ServeConfig::default()
+    })
+    .await;
+    let c = reqwest::Client::new();
+    let mut accepted = Vec::new();
+    let mut limited = 0;
+    for i in 0..20 {
+        let value = 0.01 * (i + 1) as f64;
+        let r = c
+            .put(server.http("/api/v1/mission/risk/base"))
+            .json(&json!({ "value": value }))
+            .send()
+            .await
+            .unwrap();
+        match r.status().as_u16() {
+            200 => accepted.push(value),
+            429 => {
+                limited += 1;
+                assert_eq!(r.headers()["retry-after"], "1");
+                let e: Value = r.json().await.unwrap();
+                assert_eq!(e["error"]["code"], "rate_limited");
+            }
+            other => panic!("unexpected status {other}"),
+        }
+    }
+    // A burst of 5 passes (plus what refilled meanwhile); the rest is refused.
+    assert!((5..=8).contains(&accepted.len()), "{accepted:?}");
+    assert_eq!(limited, 20 - accepted.len());
+    let mission: Value = get_json(&server, "/api/v1/mission").await;
+    assert_eq!(
+        mission["risk"]["base"].as_f64(),
+        accepted.last().copied(),
+        "a refused write changed the mission"
+    );
+    // Reads are not limited.
+    for _ in 0..20 {
+        let r = reqwest::get(server.http("/api/v1/mission")).await.unwrap();
+        assert_eq!(r.status(), 200);
+    }
+
+    // Over 1 MiB: 413 in the JSON error shape, nothing changed.
+    tokio::time::sleep(Duration::from_millis(600)).await;
+    let huge = format!(
+        "{{\"polygon\": [{}[0, 0]], \"holes\": []}}",
+        "[0, 0], ".repeat(150_000)
+    );
+    assert!(huge.len() > 1024 * 1024);
+    let r = c
+        .put(server.http("/api/v1/mission/region"))
+        .header("content-type", "application/json")
+        .body(huge)
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(r.status(), 413);
+    let e: Value = r.json().await.unwrap();
+    assert_eq!(e["error"]["code"], "too_large");
+    let after: Value = get_json(&server, "/api/v1/mission").await;
+    assert_eq!(after, mission);
+    server.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn deleting_a_vessel_forgets_it_and_tells_its_link() {
+    let server = start().await;
+    let (mut sink, mut stream) = hello(server.ws(), "gone-1").await;
+    let _ = sink.send(pose(30.0, 30.0)).await;
+    let deadline = Instant::now() + Duration::from_secs(5);
+    while !vessels(&server).await.iter().any(|v| v.id == "gone-1" && v.live) {
+        assert!(Instant::now() < deadline, "the vessel never became live");
+        tokio::time::sleep(Duration::from_millis(20)).await;
+    }
+    let c = reqwest::Client::new();
+    let r = c
+        .delete(server.http("/api/v1/vessels/gone-1"))
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(r.status(), 204);
+    assert!(vessels(&server).await.iter().all(|v| v.id != "gone-1"));
+    let r = reqwest::get(server.http("/api/v1/vessels/gone-1")).await.unwrap();
+    assert_eq!(r.status(), 404);
+    let mut told = false;
+    while let Ok(Some(Ok(msg))) = tokio::time::timeout(Duration::from_secs(2), stream.next()).await {
+        if let Message::Text(t) = msg {
+            let v: Value = serde_json::from_str(&t).unwrap();
+            if v["type"] == "error" {
+                assert_eq!(v["code"], "removed");
+                told = true;
+            }
+        }
+    }
+    assert!(told, "the link was not told");
+    let r = c
+        .delete(server.http("/api/v1/vessels/gone-1"))
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(r.status(), 404);
+    let e: Value = r.json().await.unwrap();
+    assert_eq!(e["error"]["code"], "not_found");
     server.stop().await;
 }

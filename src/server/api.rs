@@ -49,6 +49,21 @@ pub async fn vessel(
         .ok_or_else(|| ApiError::NotFound(format!("no vessel {id:?}")))
 }
 
+/// Forgets a vessel; a connected one is told `removed` and may come back by
+/// saying hello again.
+pub async fn delete_vessel(
+    State(app): State<AppState>,
+    Path(id): Path<String>,
+) -> Result<StatusCode, ApiError> {
+    let (reply, answer) = oneshot::channel();
+    app.requests
+        .send(Request::Forget { id, reply })
+        .await
+        .map_err(|_| ApiError::ShuttingDown)?;
+    answer.await.map_err(|_| ApiError::ShuttingDown)??;
+    Ok(StatusCode::NO_CONTENT)
+}
+
 pub async fn coverage(State(app): State<AppState>) -> Json<CoverageDocument> {
     Json(app.snapshot.borrow().coverage.clone())
 }

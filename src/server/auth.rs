@@ -2,6 +2,14 @@
 //! `Authorization: Bearer TOKEN` (browsers, which cannot set headers on
 //! WebSockets, may pass `?token=`). Reads stay public. Tokens are compared in
 //! constant time, so response timing reveals nothing about a wrong guess.
+//!
+//! Writes are also rate-limited: one token bucket (governor's GCRA) shared by
+//! every client, since writes are an operator's and each costs an fsync.
+//! Over the limit a write is answered 429 with `Retry-After` and changes
+//! nothing. Reads and vessel links are not limited here (links are bounded by
+//! the vessel count, reads by the body limit and the snapshot they share).
+
+use std::num::NonZeroU32;
 
 use axum::extract::{Request, State};
 use axum::middleware::Next;
@@ -37,6 +45,33 @@ pub async fn require_token(State(app): State<AppState>, request: Request, next: 
         if !ok {
             return ApiError::Unauthorized.into_response();
         }
+    }
+    next.run(request).await
+}
+
+/// The shared write budget.
+pub struct WriteLimiter {
+    bucket: governor::DefaultDirectRateLimiter,
+    per_second: u32,
+}
+
+/// A bucket refilled at `per_second` that holds `burst` writes.
+pub fn write_limiter(per_second: u32, burst: u32) -> WriteLimiter {
+    let rate = NonZeroU32::new(per_second.max(1)).expect("at least 1");
+    let burst = NonZeroU32::new(burst.max(1)).expect("at least 1");
+    WriteLimiter {
+        bucket: governor::RateLimiter::direct(governor::Quota::per_second(rate).allow_burst(burst)),
+        per_second: rate.get(),
+    }
+}
+
+/// Spends one write from the bucket for every request that is not a GET
+/// (the vessel link's upgrade is a GET).
+pub async fn limit_writes(State(app): State<AppState>, request: Request, next: Next) -> Response {
+    if request.method() != axum::http::Method::GET && app.writes.bucket.check().is_err() {
+        metrics::counter!(super::metrics::MESSAGES_REJECTED, "reason" => "rate_limited")
+            .increment(1);
+        return ApiError::RateLimited(app.writes.per_second).into_response();
     }
     next.run(request).await
 }

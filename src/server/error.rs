@@ -24,6 +24,13 @@ pub enum ApiError {
     Unauthorized,
     #[error("the coordinator is shutting down")]
     ShuttingDown,
+    #[error("the request body is larger than {0} bytes")]
+    TooLarge(usize),
+    #[error("too many writes: at most {0} per second, try again shortly")]
+    RateLimited(u32),
+    /// The store could not make a change durable; the change was not applied.
+    #[error("the change could not be stored: {0}")]
+    Storage(String),
 }
 
 impl ApiError {
@@ -36,6 +43,9 @@ impl ApiError {
             ApiError::Conflict(_) => "conflict",
             ApiError::Unauthorized => "unauthorized",
             ApiError::ShuttingDown => "shutting_down",
+            ApiError::TooLarge(_) => "too_large",
+            ApiError::RateLimited(_) => "rate_limited",
+            ApiError::Storage(_) => "storage",
         }
     }
 
@@ -47,6 +57,9 @@ impl ApiError {
             ApiError::Conflict(_) => StatusCode::CONFLICT,
             ApiError::Unauthorized => StatusCode::UNAUTHORIZED,
             ApiError::ShuttingDown => StatusCode::SERVICE_UNAVAILABLE,
+            ApiError::TooLarge(_) => StatusCode::PAYLOAD_TOO_LARGE,
+            ApiError::RateLimited(_) => StatusCode::TOO_MANY_REQUESTS,
+            ApiError::Storage(_) => StatusCode::INTERNAL_SERVER_ERROR,
         }
     }
 
@@ -72,6 +85,28 @@ impl From<ScenarioError> for ApiError {
 
 impl IntoResponse for ApiError {
     fn into_response(self) -> Response {
-        (self.status(), Json(self.document())).into_response()
+        let mut response = (self.status(), Json(self.document())).into_response();
+        if let ApiError::RateLimited(_) = self {
+            // The bucket refills one write per 1/rate s; one second is a
+            // safe, simple hint.
+            response.headers_mut().insert(
+                axum::http::header::RETRY_AFTER,
+                axum::http::HeaderValue::from_static("1"),
+            );
+        }
+        response
     }
+}
+
+/// Gives the 413 that the body limit answers (plain text, from axum) the
+/// JSON error shape of every other error.
+pub async fn json_too_large(response: Response) -> Response {
+    let is_json = response
+        .headers()
+        .get(axum::http::header::CONTENT_TYPE)
+        .is_some_and(|v| v.as_bytes().starts_with(b"application/json"));
+    if response.status() == StatusCode::PAYLOAD_TOO_LARGE && !is_json {
+        return ApiError::TooLarge(super::MAX_BODY).into_response();
+    }
+    response
 }

@@ -1,9 +1,15 @@
 //! Prometheus metrics (`GET /metrics`): connected and live vessels, tick
 //! duration histogram, skipped ticks, H, messages in and out, rejected
-//! messages by reason.
+//! messages by reason, and on Linux the standard process metrics
+//! `process_cpu_seconds_total` and `process_resident_memory_bytes`.
 //!
 //! The recorder is process-global (the `metrics` facade allows one), so
 //! several servers in one process — as in the tests — share it.
+//!
+//! The process metrics are read from `/proc` at render time and appended as
+//! text rather than recorded through the facade: its counters are integers,
+//! and whole CPU seconds are too coarse for `seacover bench load`, which
+//! divides a difference of two scrapes by the wall time between them.
 
 use std::sync::OnceLock;
 
@@ -48,6 +54,102 @@ pub async fn render() -> ([(axum::http::HeaderName, &'static str); 1], String) {
             axum::http::header::CONTENT_TYPE,
             "text/plain; version=0.0.4",
         )],
-        h.render(),
+        h.render() + &process_metrics(),
     )
+}
+
+/// The process metrics in Prometheus text, or nothing where `/proc` is
+/// missing or unreadable.
+fn process_metrics() -> String {
+    let mut out = String::new();
+    if let Some(cpu) = std::fs::read_to_string("/proc/self/stat")
+        .ok()
+        .and_then(|s| cpu_seconds(&s))
+    {
+        out.push_str(&format!(
+            "# HELP process_cpu_seconds_total Total user and system CPU time spent in seconds.\n\
+             # TYPE process_cpu_seconds_total counter\n\
+             process_cpu_seconds_total {cpu}\n"
+        ));
+    }
+    if let Some(rss) = std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| resident_bytes(&s))
+    {
+        out.push_str(&format!(
+            "# HELP process_resident_memory_bytes Resident memory size in bytes.\n\
+             # TYPE process_resident_memory_bytes gauge\n\
+             process_resident_memory_bytes {rss}\n"
+        ));
+    }
+    out
+}
+
+/// CPU seconds this process has used so far (Linux only), for
+/// [`crate::load`] to report its own share of a shared machine.
+pub fn own_cpu_seconds() -> Option<f64> {
+    cpu_seconds(&std::fs::read_to_string("/proc/self/stat").ok()?)
+}
+
+/// utime + stime of every thread of the process, from `/proc/self/stat`.
+/// The command name (field 2) may contain spaces and parentheses, so fields
+/// are counted from the last `)`. They are in USER_HZ ticks, which Linux
+/// fixes at 100 on every architecture it exports `/proc` for (the
+/// Prometheus Go client assumes the same).
+fn cpu_seconds(stat: &str) -> Option<f64> {
+    const USER_HZ: f64 = 100.0;
+    let rest = &stat[stat.rfind(')')? + 1..];
+    // After the name: state (field 3) … utime (14), stime (15).
+    let mut fields = rest.split_whitespace().skip(11);
+    let utime: u64 = fields.next()?.parse().ok()?;
+    let stime: u64 = fields.next()?.parse().ok()?;
+    Some((utime + stime) as f64 / USER_HZ)
+}
+
+/// `VmRSS` of `/proc/self/status` in bytes. It is in kB already, so no page
+/// size is needed (which `statm` would, and only libc can tell).
+fn resident_bytes(status: &str) -> Option<u64> {
+    let line = status.lines().find(|l| l.starts_with("VmRSS:"))?;
+    let kb: u64 = line
+        .trim_start_matches("VmRSS:")
+        .trim()
+        .trim_end_matches("kB")
+        .trim()
+        .parse()
+        .ok()?;
+    Some(kb * 1024)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reads_cpu_time_past_a_name_with_spaces_and_parentheses() {
+        let stat = "4242 (tokio (rt) x) S 1 4242 4242 0 -1 4194560 1 0 0 0 \
+                    250 75 0 0 20 0 9 0 100 1000 10 18446744073709551615";
+        assert_eq!(cpu_seconds(stat), Some(3.25));
+        assert_eq!(cpu_seconds("garbage"), None);
+    }
+
+    #[test]
+    fn reads_resident_memory_in_bytes() {
+        let status = "Name:\tseacover\nVmPeak:\t  900 kB\nVmRSS:\t   1234 kB\nThreads:\t3\n";
+        assert_eq!(resident_bytes(status), Some(1234 * 1024));
+        assert_eq!(resident_bytes("Name:\tx\n"), None);
+    }
+
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn this_process_reports_both() {
+        let text = process_metrics();
+        let value = |name: &str| -> f64 {
+            text.lines()
+                .find_map(|l| l.strip_prefix(name)?.trim().parse().ok())
+                .unwrap()
+        };
+        assert!(value("process_cpu_seconds_total ") >= 0.0);
+        // Any running Rust test binary is resident in more than 100 kB.
+        assert!(value("process_resident_memory_bytes ") > 100e3);
+    }
 }

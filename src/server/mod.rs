@@ -8,19 +8,22 @@
 
 pub mod api;
 pub mod auth;
+pub mod config;
 pub mod error;
 pub mod metrics;
 pub mod state;
+pub mod store;
 pub mod ws;
 
 use std::net::SocketAddr;
+use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::AtomicU64;
 use std::time::Duration;
 
 use axum::Router;
 use axum::extract::DefaultBodyLimit;
-use axum::routing::{get, post, put};
+use axum::routing::{delete, get, post, put};
 use tokio::net::TcpListener;
 use tokio::sync::{mpsc, watch};
 use tokio_util::sync::CancellationToken;
@@ -38,6 +41,9 @@ pub struct AppState {
     pub tracker: TaskTracker,
     pub shutdown: CancellationToken,
     pub next_link: Arc<AtomicU64>,
+    /// One token bucket for every write of every client: writes are an
+    /// operator's, and each costs an fsync.
+    pub writes: Arc<auth::WriteLimiter>,
 }
 
 /// Server settings.
@@ -50,6 +56,13 @@ pub struct ServeConfig {
     pub time_warp: f64,
     /// Mission seconds of silence after which a vessel leaves the partition.
     pub liveness: f64,
+    /// Where the mission is stored; `None` keeps it in memory only. When the
+    /// store already holds a mission, that one is served and `mission` is
+    /// ignored; otherwise `mission` seeds the store.
+    pub data_dir: Option<PathBuf>,
+    /// Writes per second allowed, and the burst.
+    pub write_rate: u32,
+    pub write_burst: u32,
 }
 
 impl Default for ServeConfig {
@@ -59,6 +72,9 @@ impl Default for ServeConfig {
             token: None,
             time_warp: 1.0,
             liveness: 3.0,
+            data_dir: None,
+            write_rate: 50,
+            write_burst: 100,
         }
     }
 }
@@ -72,9 +88,19 @@ pub enum ServeError {
     PublicWithoutToken(SocketAddr),
     #[error("serving: {0}")]
     Io(#[from] std::io::Error),
+    #[error(transparent)]
+    Store(#[from] store::StoreError),
+    #[error("the mission stored in {path} is not valid: {source}")]
+    StoredMission {
+        path: PathBuf,
+        source: error::ApiError,
+    },
 }
 
-/// Every route of SPEC §3 implemented so far.
+/// Largest request body accepted.
+pub const MAX_BODY: usize = 1024 * 1024;
+
+/// Every route of SPEC §3.
 pub fn router(app: AppState) -> Router {
     let writes = Router::new()
         .route("/api/v1/mission/region", put(api::put_region))
@@ -84,7 +110,13 @@ pub fn router(app: AppState) -> Router {
             "/api/v1/risk-objects/{id}",
             put(api::put_object).delete(api::delete_object),
         )
+        .route("/api/v1/vessels/{id}", delete(api::delete_vessel))
         .route("/api/v1/vessels/link", get(ws::link))
+        // The token is checked first, so strangers cannot spend the budget.
+        .route_layer(axum::middleware::from_fn_with_state(
+            app.clone(),
+            auth::limit_writes,
+        ))
         .route_layer(axum::middleware::from_fn_with_state(
             app.clone(),
             auth::require_token,
@@ -101,7 +133,8 @@ pub fn router(app: AppState) -> Router {
         .route("/api/v1/coverage", get(api::coverage))
         .route("/api/v1/coverage/evaluate", post(api::evaluate))
         .route("/api/v1/stream", get(ws::stream))
-        .layer(DefaultBodyLimit::max(1024 * 1024))
+        .layer(axum::middleware::map_response(error::json_too_large))
+        .layer(DefaultBodyLimit::max(MAX_BODY))
         .with_state(app)
 }
 
@@ -116,12 +149,41 @@ pub async fn serve(
         return Err(ServeError::PublicWithoutToken(addr));
     }
     metrics::handle();
+    let (mission, store) = match &config.data_dir {
+        Some(dir) => {
+            let store = store::Store::open(dir)?;
+            let mission = match store.load()? {
+                Some(doc) => {
+                    let mission = Mission::from_document(&doc).map_err(|source| {
+                        ServeError::StoredMission {
+                            path: store.path().to_path_buf(),
+                            source,
+                        }
+                    })?;
+                    tracing::info!(
+                        path = %store.path().display(),
+                        objects = mission.objects().len(),
+                        "serving the stored mission (a --config mission only seeds an empty data directory)"
+                    );
+                    mission
+                }
+                None => {
+                    store.save(&config.mission.document())?;
+                    tracing::info!(path = %store.path().display(), "new store seeded with the configured mission");
+                    config.mission
+                }
+            };
+            (mission, Some(store))
+        }
+        None => (config.mission, None),
+    };
     let (coordinator, snapshot) = Coordinator::new(
-        config.mission,
+        mission,
         TickSettings {
             time_warp: config.time_warp,
             liveness: config.liveness,
         },
+        store,
     );
     let (requests, rx) = mpsc::channel(1024);
     let tracker = TaskTracker::new();
@@ -133,6 +195,7 @@ pub async fn serve(
         tracker: tracker.clone(),
         shutdown: shutdown.clone(),
         next_link: Arc::new(AtomicU64::new(1)),
+        writes: Arc::new(auth::write_limiter(config.write_rate, config.write_burst)),
     };
     let signal = shutdown.clone();
     axum::serve(listener, router(app))

@@ -27,6 +27,7 @@ use crate::protocol::{
     MissionDocument, PoseDocument, RegionDocument, RiskDocument, RiskObjectDocument,
     SnapshotDocument, VesselStatusDocument,
 };
+use super::store::Store;
 use crate::scenario::{Scenario, evaluation_document};
 
 /// The mission: what to cover and how.
@@ -64,6 +65,49 @@ impl Mission {
             guidance: GuidanceGains::default(),
             tick_hz: 10.0,
         }
+    }
+
+    /// A mission from its document (a stored mission, a `--config` file),
+    /// validated as `evaluate` validates a scenario, plus the guidance gains
+    /// and the tick rate.
+    pub fn from_document(doc: &MissionDocument) -> Result<Mission, ApiError> {
+        let region = crate::scenario::region_from_document(&doc.region)?;
+        let risk = risk_field(&doc.risk)?;
+        // The actuator is checked as a scenario's vessel would be.
+        Fleet::new(vec![Vessel {
+            position: Point { x: 0.0, y: 0.0 },
+            k: doc.actuator.k,
+            beta: doc.actuator.beta,
+        }])
+        .map_err(|e| ApiError::from(crate::scenario::ScenarioError::from(e)))
+        .map_err(|e| ApiError::Invalid(format!("actuator: {e}")))?;
+        if !(doc.tick_hz.is_finite() && doc.tick_hz > 0.0 && doc.tick_hz <= 100.0) {
+            return Err(ApiError::Invalid("tick_hz: must be in (0, 100]".into()));
+        }
+        let mut risk_doc = doc.risk.clone();
+        let mut seen = std::collections::HashSet::new();
+        for (i, o) in risk_doc.objects.iter_mut().enumerate() {
+            let id = o.id.get_or_insert_with(|| format!("object-{}", i + 1));
+            if !crate::scenario::valid_id(id) {
+                return Err(ApiError::Invalid(format!(
+                    "risk.objects[{i}].id: must match [A-Za-z0-9_.-]{{1,64}}"
+                )));
+            }
+            if !seen.insert(id.clone()) {
+                return Err(ApiError::Invalid(format!(
+                    "risk.objects[{i}].id: duplicate id {id:?}"
+                )));
+            }
+        }
+        Ok(Mission {
+            region_doc: doc.region.clone(),
+            risk_doc,
+            region,
+            risk,
+            actuator: doc.actuator,
+            guidance: guidance_gains(&doc.guidance)?,
+            tick_hz: doc.tick_hz,
+        })
     }
 
     pub fn document(&self) -> MissionDocument {
@@ -117,6 +161,12 @@ pub enum Request {
     },
     /// A link closed.
     Gone { id: String, link: u64 },
+    /// `DELETE /api/v1/vessels/{id}`: forget the vessel; its link, if any, is
+    /// told `removed` and closed.
+    Forget {
+        id: String,
+        reply: oneshot::Sender<Result<(), ApiError>>,
+    },
     /// An operator's change to the mission; the reply is the changed
     /// document's new state.
     Change {
@@ -218,19 +268,7 @@ impl Mission {
                 None
             }
         };
-        next.risk = RiskField::new(
-            next.risk_doc.base,
-            next.risk_doc
-                .objects
-                .iter()
-                .map(|o| crate::coverage::RiskObject {
-                    center: Point { x: o.x, y: o.y },
-                    alpha: o.alpha,
-                    sigma: o.sigma,
-                })
-                .collect(),
-        )
-        .map_err(|e| ApiError::from(crate::scenario::ScenarioError::from(e)))?;
+        next.risk = risk_field(&next.risk_doc)?;
         let answer = match (change, result) {
             (MissionChange::DeleteObject(_), _) => ChangeResult::Deleted,
             (_, Some(object)) => ChangeResult::Object(object),
@@ -238,6 +276,68 @@ impl Mission {
         };
         Ok((next, answer))
     }
+}
+
+fn risk_field(doc: &RiskDocument) -> Result<RiskField, ApiError> {
+    RiskField::new(
+        doc.base,
+        doc.objects
+            .iter()
+            .map(|o| crate::coverage::RiskObject {
+                center: Point { x: o.x, y: o.y },
+                alpha: o.alpha,
+                sigma: o.sigma,
+            })
+            .collect(),
+    )
+    .map_err(|e| ApiError::from(crate::scenario::ScenarioError::from(e)))
+}
+
+/// Guidance gains from their document: a known mode, every gain finite and
+/// positive (the arrival radius may be zero).
+pub fn guidance_gains(doc: &GuidanceDocument) -> Result<GuidanceGains, ApiError> {
+    let mode = GuidanceMode::parse(&doc.mode).ok_or_else(|| {
+        ApiError::Invalid(format!(
+            "guidance.mode: unknown mode {:?} (paper, course)",
+            doc.mode
+        ))
+    })?;
+    let gains = [
+        ("k_r1", doc.k_r1),
+        ("k_r2", doc.k_r2),
+        ("b1", doc.b1),
+        ("k_u1", doc.k_u1),
+        ("k_u2", doc.k_u2),
+        ("b2", doc.b2),
+        ("max_speed", doc.max_speed),
+        ("max_yaw_rate", doc.max_yaw_rate),
+        ("filter_time", doc.filter_time),
+    ];
+    for (name, value) in gains {
+        if !(value.is_finite() && value > 0.0) {
+            return Err(ApiError::Invalid(format!(
+                "guidance.{name}: must be a finite number > 0"
+            )));
+        }
+    }
+    if !(doc.arrival_radius.is_finite() && doc.arrival_radius >= 0.0) {
+        return Err(ApiError::Invalid(
+            "guidance.arrival_radius: must be a finite number >= 0".into(),
+        ));
+    }
+    Ok(GuidanceGains {
+        mode,
+        k_r1: doc.k_r1,
+        k_r2: doc.k_r2,
+        b1: doc.b1,
+        k_u1: doc.k_u1,
+        k_u2: doc.k_u2,
+        b2: doc.b2,
+        arrival_radius: doc.arrival_radius,
+        max_speed: doc.max_speed,
+        max_yaw_rate: doc.max_yaw_rate,
+        filter_time: doc.filter_time,
+    })
 }
 
 /// The newest state, for readers.
@@ -277,12 +377,16 @@ pub struct Coordinator {
     vessels: BTreeMap<String, Entry>,
     tick: u64,
     snapshot: watch::Sender<Arc<Snapshot>>,
+    /// Where accepted changes are made durable before they are answered;
+    /// `None` keeps the mission in memory only (the demo).
+    store: Option<Store>,
 }
 
 impl Coordinator {
     pub fn new(
         mission: Mission,
         settings: TickSettings,
+        store: Option<Store>,
     ) -> (Coordinator, watch::Receiver<Arc<Snapshot>>) {
         let empty = Arc::new(Snapshot {
             document: SnapshotDocument {
@@ -307,6 +411,7 @@ impl Coordinator {
                 vessels: BTreeMap::new(),
                 tick: 0,
                 snapshot: tx,
+                store,
             },
             rx,
         )
@@ -411,9 +516,20 @@ impl Coordinator {
                 }
             }
             Request::Change { change, reply } => {
-                let outcome = self.mission.changed(&change).map(|(next, answer)| {
+                let outcome = self.mission.changed(&change).and_then(|(next, answer)| {
+                    // Durable first, applied second: a change the store
+                    // refuses is not applied, and one that is answered
+                    // survives a crash. The commit blocks this task for one
+                    // fsync (a few ms); writes are rate-limited, so the tick
+                    // loses at most that, and changes stay in one order.
+                    if let Some(store) = &self.store {
+                        store.apply(&change, &answer).map_err(|e| {
+                            tracing::error!(error = %e, "a mission change could not be stored");
+                            ApiError::Storage(e.to_string())
+                        })?;
+                    }
                     self.mission = next;
-                    answer
+                    Ok(answer)
                 });
                 if outcome.is_ok() {
                     // Readers see the write at once, not at the next tick.
@@ -422,6 +538,25 @@ impl Coordinator {
                     let evaluation = self.evaluate_live(&live);
                     self.publish(time, &live, evaluation.as_ref());
                 }
+                let _ = reply.send(outcome);
+            }
+            Request::Forget { id, reply } => {
+                let outcome = match self.vessels.remove(&id) {
+                    Some(entry) => {
+                        if let Some(link) = entry.link {
+                            let _ = link.tx.try_send(CoordinatorMessage::Error {
+                                code: "removed".into(),
+                                message: "an operator removed this vessel from the mission".into(),
+                            });
+                        }
+                        let time = self.tick as f64 / self.mission.tick_hz;
+                        let live = self.live_ids();
+                        let evaluation = self.evaluate_live(&live);
+                        self.publish(time, &live, evaluation.as_ref());
+                        Ok(())
+                    }
+                    None => Err(ApiError::NotFound(format!("no vessel {id:?}"))),
+                };
                 let _ = reply.send(outcome);
             }
             Request::Gone { id, link } => {

@@ -1,0 +1,259 @@
+//! `seacover serve --config FILE`: the mission and server settings as TOML.
+//!
+//! Every key is optional; what is missing comes from the paper's scenario
+//! (region, risk, actuator), the default guidance gains, 10 Hz and the
+//! default server settings. The mission part is validated exactly as a
+//! mission stored or written over REST is ([`Mission::from_document`]), so a
+//! file that `serve` accepts is one the API would have accepted.
+//!
+//! The file seeds a new data directory only: once the store holds a mission,
+//! that mission is the truth (as a database's init scripts run on an empty
+//! data directory only), and `serve` says so in its log.
+//!
+//! ```toml
+//! tick_hz = 10.0
+//!
+//! [server]
+//! liveness = 3.0       # mission seconds of silence before a vessel leaves
+//! write_rate = 50      # writes per second (token bucket)
+//! write_burst = 100
+//!
+//! [region]
+//! polygon = [[0, 0], [100, 0], [100, 100], [0, 100]]
+//! holes = [[[40, 40], [60, 40], [60, 60], [40, 60]]]
+//!
+//! [risk]
+//! base = 0.1
+//! objects = [{ id = "wreck", x = 20, y = 70, alpha = 5, sigma = 6 }]
+//!
+//! [actuator]
+//! k = 0.5
+//! beta = 0.001
+//!
+//! [guidance]
+//! mode = "course"
+//! max_speed = 1.5
+//! ```
+
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+use super::error::ApiError;
+use super::state::Mission;
+use crate::protocol::{ActuatorDocument, RegionDocument, RiskDocument};
+
+/// The file as written: everything optional.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ConfigFile {
+    pub tick_hz: Option<f64>,
+    #[serde(default)]
+    pub server: ServerSection,
+    pub region: Option<RegionDocument>,
+    pub risk: Option<RiskDocument>,
+    pub actuator: Option<ActuatorDocument>,
+    #[serde(default)]
+    pub guidance: GuidanceSection,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ServerSection {
+    pub liveness: Option<f64>,
+    pub write_rate: Option<u32>,
+    pub write_burst: Option<u32>,
+}
+
+/// Guidance gains, each defaulting to [`GuidanceGains::default`](crate::control::guidance::GuidanceGains).
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GuidanceSection {
+    pub mode: Option<String>,
+    pub k_r1: Option<f64>,
+    pub k_r2: Option<f64>,
+    pub b1: Option<f64>,
+    pub k_u1: Option<f64>,
+    pub k_u2: Option<f64>,
+    pub b2: Option<f64>,
+    pub arrival_radius: Option<f64>,
+    pub max_speed: Option<f64>,
+    pub max_yaw_rate: Option<f64>,
+    pub filter_time: Option<f64>,
+}
+
+/// What a configuration file settles.
+#[derive(Debug, Clone)]
+pub struct Settings {
+    pub mission: Mission,
+    pub liveness: f64,
+    pub write_rate: u32,
+    pub write_burst: u32,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings {
+            mission: Mission::paper(),
+            liveness: 3.0,
+            write_rate: 50,
+            write_burst: 100,
+        }
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum ConfigError {
+    #[error("reading {path}: {source}")]
+    Read {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{path}: {source}")]
+    Syntax {
+        path: PathBuf,
+        source: Box<toml::de::Error>,
+    },
+    #[error("{path}: {source}")]
+    Invalid { path: PathBuf, source: ApiError },
+}
+
+impl Settings {
+    /// Reads and validates a configuration file.
+    pub fn load(path: &Path) -> Result<Settings, ConfigError> {
+        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Settings::parse(&text).map_err(|e| match e {
+            ParseError::Syntax(source) => ConfigError::Syntax {
+                path: path.to_path_buf(),
+                source,
+            },
+            ParseError::Invalid(source) => ConfigError::Invalid {
+                path: path.to_path_buf(),
+                source,
+            },
+        })
+    }
+
+    /// Parses and validates the text of a configuration file.
+    pub fn parse(text: &str) -> Result<Settings, ParseError> {
+        let file: ConfigFile =
+            toml::from_str(text).map_err(|e| ParseError::Syntax(Box::new(e)))?;
+        Settings::from_file(file).map_err(ParseError::Invalid)
+    }
+
+    fn from_file(file: ConfigFile) -> Result<Settings, ApiError> {
+        let defaults = Settings::default();
+        let mut doc = defaults.mission.document();
+        if let Some(region) = file.region {
+            doc.region = region;
+        }
+        if let Some(risk) = file.risk {
+            doc.risk = risk;
+        }
+        if let Some(actuator) = file.actuator {
+            doc.actuator = actuator;
+        }
+        if let Some(hz) = file.tick_hz {
+            doc.tick_hz = hz;
+        }
+        let g = file.guidance;
+        let d = &mut doc.guidance;
+        if let Some(mode) = g.mode {
+            d.mode = mode;
+        }
+        for (slot, value) in [
+            (&mut d.k_r1, g.k_r1),
+            (&mut d.k_r2, g.k_r2),
+            (&mut d.b1, g.b1),
+            (&mut d.k_u1, g.k_u1),
+            (&mut d.k_u2, g.k_u2),
+            (&mut d.b2, g.b2),
+            (&mut d.arrival_radius, g.arrival_radius),
+            (&mut d.max_speed, g.max_speed),
+            (&mut d.max_yaw_rate, g.max_yaw_rate),
+            (&mut d.filter_time, g.filter_time),
+        ] {
+            if let Some(v) = value {
+                *slot = v;
+            }
+        }
+        let mission = Mission::from_document(&doc)?;
+        let liveness = file.server.liveness.unwrap_or(defaults.liveness);
+        if !(liveness.is_finite() && liveness > 0.0 && liveness <= 3600.0) {
+            return Err(ApiError::Invalid(
+                "server.liveness: must be in (0, 3600] s".into(),
+            ));
+        }
+        let write_rate = file.server.write_rate.unwrap_or(defaults.write_rate);
+        let write_burst = file.server.write_burst.unwrap_or(defaults.write_burst);
+        if write_rate == 0 || write_burst == 0 {
+            return Err(ApiError::Invalid(
+                "server.write_rate and server.write_burst: must be > 0".into(),
+            ));
+        }
+        Ok(Settings {
+            mission,
+            liveness,
+            write_rate,
+            write_burst,
+        })
+    }
+}
+
+/// Why a configuration text was refused.
+#[derive(Debug, thiserror::Error)]
+pub enum ParseError {
+    #[error("{0}")]
+    Syntax(Box<toml::de::Error>),
+    #[error("{0}")]
+    Invalid(ApiError),
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_empty_file_is_the_paper_mission() {
+        let s = Settings::parse("").unwrap();
+        assert_eq!(s.mission.document(), Mission::paper().document());
+        assert_eq!(s.liveness, 3.0);
+    }
+
+    #[test]
+    fn the_shipped_example_parses_and_overrides() {
+        let s = Settings::parse(include_str!("../../examples/seacover.toml")).unwrap();
+        let doc = s.mission.document();
+        assert_eq!(doc.tick_hz, 10.0);
+        assert_eq!(doc.region.holes.len(), 1);
+        assert_eq!(doc.risk.objects[0].id.as_deref(), Some("wreck"));
+        assert_eq!(doc.guidance.max_speed, 1.5);
+        assert_eq!(s.write_rate, 50);
+    }
+
+    #[test]
+    fn bad_files_name_the_key() {
+        for (text, needle) in [
+            ("tick_hz = 0", "tick_hz"),
+            ("tick_hz = \"fast\"", "tick_hz"),
+            ("[guidance]\nmode = \"zigzag\"", "guidance.mode"),
+            ("[guidance]\nmax_speed = -1", "guidance.max_speed"),
+            ("[risk]\nbase = -1", "base"),
+            (
+                "[risk]\nbase = 0.1\nobjects = [{x = 1, y = 1, alpha = 1, sigma = 0}]",
+                "sigma",
+            ),
+            ("[region]\npolygon = [[0, 0], [1, 1], [2, 2]]", "polygon"),
+            ("[actuator]\nk = 0\nbeta = 0.001", "actuator"),
+            ("[server]\nliveness = 0", "server.liveness"),
+            ("[server]\nwrite_rate = 0", "write_rate"),
+            ("speed = 3", "speed"),
+        ] {
+            let err = Settings::parse(text).unwrap_err().to_string();
+            assert!(err.contains(needle), "{text:?}: {err}");
+        }
+    }
+}
