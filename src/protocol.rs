@@ -37,11 +37,11 @@ pub struct ScenarioDocument {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
 pub struct RegionDocument {
     /// Outer ring `[[x, y], …]` in metres, without the closing vertex.
-    #[schema(schema_with = schema::ring)]
+    #[schema(schema_with = schema::region_polygon)]
     pub polygon: Vec<XY>,
     /// Islands: rings strictly inside the polygon and disjoint.
     #[serde(default)]
-    #[schema(schema_with = schema::rings)]
+    #[schema(schema_with = schema::region_holes)]
     pub holes: Vec<Vec<XY>>,
 }
 
@@ -101,20 +101,20 @@ pub struct CellDocument {
     /// M_i = ∫_{V_i} f_i Φ.
     pub mass: f64,
     /// C_i; the nearest point of the region for an empty cell.
-    #[schema(schema_with = schema::xy)]
+    #[schema(value_type = Vec<f64>, min_items = 2, max_items = 2)]
     pub centroid: XY,
     /// [m²].
     pub area: f64,
     /// Outer ring of the cell (of its largest piece when it has several),
     /// counter-clockwise, without the closing vertex; `null` when empty.
-    #[schema(schema_with = schema::ring_or_null, required = true)]
+    #[schema(schema_with = schema::cell_polygon, required = true)]
     pub polygon: Option<Vec<XY>>,
     /// Every piece with its holes, present only when the cell is not one
     /// simple polygon (several pieces, or a hole of Q inside it).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub pieces: Vec<RegionDocument>,
     /// ∂H/∂p_i = 2β M_i (C_i − p_i).
-    #[schema(schema_with = schema::xy)]
+    #[schema(value_type = Vec<f64>, min_items = 2, max_items = 2)]
     pub gradient: XY,
 }
 
@@ -202,7 +202,7 @@ pub struct CommandDocument {
     pub u_d_dot: f64,
     pub r_d_dot: f64,
     /// The vessel's cell centroid, its goal.
-    #[schema(schema_with = schema::xy)]
+    #[schema(value_type = Vec<f64>, min_items = 2, max_items = 2)]
     pub centroid: XY,
     /// Distance to the centroid [m].
     #[serde(rename = "E")]
@@ -251,10 +251,11 @@ pub struct VesselStatusDocument {
     pub pose: Option<PoseDocument>,
     pub actuator: ActuatorDocument,
     /// The cell's outer ring; `null` when the vessel has no cell.
-    #[schema(schema_with = schema::ring_or_null, required = true)]
+    #[schema(schema_with = schema::status_polygon, required = true)]
     pub polygon: Option<Vec<XY>>,
     pub mass: f64,
-    #[schema(schema_with = schema::xy_or_null, required = true)]
+    /// The cell's centroid, the vessel's goal; `null` without a cell.
+    #[schema(value_type = Option<Vec<f64>>, min_items = 2, max_items = 2, required = true)]
     pub centroid: Option<XY>,
     #[schema(required = true)]
     pub last_command: Option<CommandDocument>,
@@ -286,16 +287,18 @@ pub struct SnapshotDocument {
     pub vessels: Vec<VesselStatusDocument>,
 }
 
-/// OpenAPI schemas of the `[x, y]` shapes. utoipa reads field types by name
-/// and cannot see through the [`XY`] alias (schemars can), so these spell
-/// out what serde accepts for `[f64; 2]`: exactly two numbers.
+/// OpenAPI schemas of the rings. utoipa reads field types by name and cannot
+/// see through the [`XY`] alias (schemars can): a lone `XY` field says
+/// `value_type = Vec<f64>, min_items = 2, max_items = 2`, and lists of them
+/// come from here, with their descriptions (utoipa drops a field's doc
+/// comment when `schema_with` builds its schema).
 mod schema {
     use utoipa::openapi::schema::{ArrayBuilder, ObjectBuilder, SchemaType, Type};
     use utoipa::openapi::{KnownFormat, SchemaFormat};
 
-    fn point(types: SchemaType) -> ArrayBuilder {
+    /// `[x, y]`: exactly two numbers, as serde reads `[f64; 2]`.
+    fn xy() -> ArrayBuilder {
         ArrayBuilder::new()
-            .schema_type(types)
             .items(
                 ObjectBuilder::new()
                     .schema_type(Type::Number)
@@ -305,27 +308,43 @@ mod schema {
             .max_items(Some(2))
     }
 
-    fn list(item: ArrayBuilder, types: SchemaType) -> ArrayBuilder {
-        ArrayBuilder::new().schema_type(types).items(item)
+    /// `[[x, y], …]`.
+    fn points() -> ArrayBuilder {
+        ArrayBuilder::new().items(xy())
     }
 
-    pub fn xy() -> ArrayBuilder {
-        point(Type::Array.into())
+    fn ring(description: &str) -> ArrayBuilder {
+        points().description(Some(description))
     }
 
-    pub fn xy_or_null() -> ArrayBuilder {
-        point([Type::Array, Type::Null].into_iter().collect())
+    fn or_null(array: ArrayBuilder) -> ArrayBuilder {
+        array.schema_type(
+            [Type::Array, Type::Null]
+                .into_iter()
+                .collect::<SchemaType>(),
+        )
     }
 
-    pub fn ring() -> ArrayBuilder {
-        list(xy(), Type::Array.into())
+    pub fn region_polygon() -> ArrayBuilder {
+        ring("Outer ring `[[x, y], …]` in metres, without the closing vertex.")
     }
 
-    pub fn ring_or_null() -> ArrayBuilder {
-        list(xy(), [Type::Array, Type::Null].into_iter().collect())
+    pub fn region_holes() -> ArrayBuilder {
+        ArrayBuilder::new().items(points()).description(Some(
+            "Islands: rings strictly inside the polygon and disjoint.",
+        ))
     }
 
-    pub fn rings() -> ArrayBuilder {
-        list(ring(), Type::Array.into())
+    pub fn cell_polygon() -> ArrayBuilder {
+        or_null(ring(
+            "Outer ring of the cell (of its largest piece when it has several), \
+             counter-clockwise, without the closing vertex; `null` when empty.",
+        ))
+    }
+
+    pub fn status_polygon() -> ArrayBuilder {
+        or_null(ring(
+            "The cell's outer ring; `null` when the vessel has no cell.",
+        ))
     }
 }

@@ -19,22 +19,61 @@ use crate::protocol::{
 };
 use crate::scenario::{Scenario, evaluation_document, parse_document};
 
+/// Liveness: `ok` while the server answers.
+#[utoipa::path(
+    get,
+    path = "/healthz",
+    tag = "system",
+    responses((status = 200, description = "The server is up.", body = String, content_type = "text/plain", example = "ok")),
+)]
 pub async fn healthz() -> &'static str {
     "ok"
 }
 
+/// The mission: region, risk density, actuator, guidance and tick rate.
+#[utoipa::path(
+    get,
+    path = "/api/v1/mission",
+    tag = "mission",
+    responses((status = 200, description = "The current mission.", body = MissionDocument)),
+)]
 pub async fn mission(State(app): State<AppState>) -> Json<MissionDocument> {
     Json(app.snapshot.borrow().document.mission.clone())
 }
 
+/// Every risk object of the mission, with its id.
+#[utoipa::path(
+    get,
+    path = "/api/v1/risk-objects",
+    tag = "mission",
+    responses((status = 200, description = "The risk objects.", body = Vec<RiskObjectDocument>)),
+)]
 pub async fn risk_objects(State(app): State<AppState>) -> Json<Vec<RiskObjectDocument>> {
     Json(app.snapshot.borrow().document.mission.risk.objects.clone())
 }
 
+/// Every vessel the coordinator knows, connected or not.
+#[utoipa::path(
+    get,
+    path = "/api/v1/vessels",
+    tag = "vessels",
+    responses((status = 200, description = "Pose, link state, cell and last command of each vessel.", body = Vec<VesselStatusDocument>)),
+)]
 pub async fn vessels(State(app): State<AppState>) -> Json<Vec<VesselStatusDocument>> {
     Json(app.snapshot.borrow().document.vessels.clone())
 }
 
+/// One vessel.
+#[utoipa::path(
+    get,
+    path = "/api/v1/vessels/{id}",
+    tag = "vessels",
+    params(("id" = String, Path, description = "The vessel's id.")),
+    responses(
+        (status = 200, description = "The vessel.", body = VesselStatusDocument),
+        (status = 404, response = super::openapi::NotFound),
+    ),
+)]
 pub async fn vessel(
     State(app): State<AppState>,
     Path(id): Path<String>,
@@ -51,6 +90,20 @@ pub async fn vessel(
 
 /// Forgets a vessel; a connected one is told `removed` and may come back by
 /// saying hello again.
+#[utoipa::path(
+    delete,
+    path = "/api/v1/vessels/{id}",
+    tag = "vessels",
+    params(("id" = String, Path, description = "The vessel's id.")),
+    responses(
+        (status = 204, description = "Forgotten; its link, if any, got an `error` frame with code `removed` and was closed."),
+        (status = 401, response = super::openapi::Unauthorized),
+        (status = 404, response = super::openapi::NotFound),
+        (status = 429, response = super::openapi::RateLimited),
+        (status = 503, response = super::openapi::ShuttingDown),
+    ),
+    security(("bearer" = [])),
+)]
 pub async fn delete_vessel(
     State(app): State<AppState>,
     Path(id): Path<String>,
@@ -64,10 +117,33 @@ pub async fn delete_vessel(
     Ok(StatusCode::NO_CONTENT)
 }
 
+/// The partition of the newest tick: H and every live vessel's cell.
+#[utoipa::path(
+    get,
+    path = "/api/v1/coverage",
+    tag = "coverage",
+    responses((status = 200, description = "Tick, mission time, H and cells.", body = CoverageDocument)),
+)]
 pub async fn coverage(State(app): State<AppState>) -> Json<CoverageDocument> {
     Json(app.snapshot.borrow().coverage.clone())
 }
 
+/// A stateless what-if: evaluates a scenario document, taking the region
+/// and the risk it omits from the current mission. Validated exactly as
+/// `seacover evaluate` validates; changes nothing.
+#[utoipa::path(
+    post,
+    path = "/api/v1/coverage/evaluate",
+    tag = "coverage",
+    request_body = crate::protocol::ScenarioDocument,
+    responses(
+        (status = 200, description = "The evaluation, cells in the order of the request's vessels.", body = EvaluationDocument),
+        (status = 400, response = super::openapi::Malformed),
+        (status = 413, response = super::openapi::TooLarge),
+        (status = 422, response = super::openapi::Invalid),
+        (status = 503, response = super::openapi::ShuttingDown),
+    ),
+)]
 pub async fn evaluate(
     State(app): State<AppState>,
     body: Bytes,
@@ -114,6 +190,24 @@ fn respond(status: StatusCode, result: ChangeResult) -> Response {
     }
 }
 
+/// Replaces the task region.
+#[utoipa::path(
+    put,
+    path = "/api/v1/mission/region",
+    tag = "mission",
+    request_body = RegionDocument,
+    responses(
+        (status = 200, description = "The mission with the new region, once durable.", body = MissionDocument),
+        (status = 400, response = super::openapi::Malformed),
+        (status = 401, response = super::openapi::Unauthorized),
+        (status = 413, response = super::openapi::TooLarge),
+        (status = 422, response = super::openapi::Invalid),
+        (status = 429, response = super::openapi::RateLimited),
+        (status = 500, response = super::openapi::NotStored),
+        (status = 503, response = super::openapi::ShuttingDown),
+    ),
+    security(("bearer" = [])),
+)]
 pub async fn put_region(State(app): State<AppState>, body: Bytes) -> Result<Response, ApiError> {
     let region: RegionDocument = parse(&body)?;
     Ok(respond(
@@ -127,6 +221,24 @@ struct Value {
     value: f64,
 }
 
+/// Sets the base risk density φ0.
+#[utoipa::path(
+    put,
+    path = "/api/v1/mission/risk/base",
+    tag = "mission",
+    request_body = super::openapi::RiskBaseDocument,
+    responses(
+        (status = 200, description = "The mission with the new base density, once durable.", body = MissionDocument),
+        (status = 400, response = super::openapi::Malformed),
+        (status = 401, response = super::openapi::Unauthorized),
+        (status = 413, response = super::openapi::TooLarge),
+        (status = 422, response = super::openapi::Invalid),
+        (status = 429, response = super::openapi::RateLimited),
+        (status = 500, response = super::openapi::NotStored),
+        (status = 503, response = super::openapi::ShuttingDown),
+    ),
+    security(("bearer" = [])),
+)]
 pub async fn put_base(State(app): State<AppState>, body: Bytes) -> Result<Response, ApiError> {
     let v: Value = parse(&body)?;
     Ok(respond(
@@ -135,6 +247,25 @@ pub async fn put_base(State(app): State<AppState>, body: Bytes) -> Result<Respon
     ))
 }
 
+/// Adds a risk object; without an id the server assigns `object-N`.
+#[utoipa::path(
+    post,
+    path = "/api/v1/risk-objects",
+    tag = "mission",
+    request_body = RiskObjectDocument,
+    responses(
+        (status = 201, description = "The stored object with its id, once durable.", body = RiskObjectDocument),
+        (status = 400, response = super::openapi::Malformed),
+        (status = 401, response = super::openapi::Unauthorized),
+        (status = 409, response = super::openapi::Conflict),
+        (status = 413, response = super::openapi::TooLarge),
+        (status = 422, response = super::openapi::Invalid),
+        (status = 429, response = super::openapi::RateLimited),
+        (status = 500, response = super::openapi::NotStored),
+        (status = 503, response = super::openapi::ShuttingDown),
+    ),
+    security(("bearer" = [])),
+)]
 pub async fn post_object(State(app): State<AppState>, body: Bytes) -> Result<Response, ApiError> {
     let object: RiskObjectDocument = parse(&body)?;
     Ok(respond(
@@ -143,6 +274,17 @@ pub async fn post_object(State(app): State<AppState>, body: Bytes) -> Result<Res
     ))
 }
 
+/// One risk object.
+#[utoipa::path(
+    get,
+    path = "/api/v1/risk-objects/{id}",
+    tag = "mission",
+    params(("id" = String, Path, description = "The risk object's id.")),
+    responses(
+        (status = 200, description = "The risk object.", body = RiskObjectDocument),
+        (status = 404, response = super::openapi::NotFound),
+    ),
+)]
 pub async fn get_object(
     State(app): State<AppState>,
     Path(id): Path<String>,
@@ -159,6 +301,26 @@ pub async fn get_object(
         .ok_or_else(|| ApiError::NotFound(format!("no risk object {id:?}")))
 }
 
+/// Replaces a risk object; the path's id wins over one in the body.
+#[utoipa::path(
+    put,
+    path = "/api/v1/risk-objects/{id}",
+    tag = "mission",
+    params(("id" = String, Path, description = "The risk object's id.")),
+    request_body = RiskObjectDocument,
+    responses(
+        (status = 200, description = "The stored object, once durable.", body = RiskObjectDocument),
+        (status = 400, response = super::openapi::Malformed),
+        (status = 401, response = super::openapi::Unauthorized),
+        (status = 404, response = super::openapi::NotFound),
+        (status = 413, response = super::openapi::TooLarge),
+        (status = 422, response = super::openapi::Invalid),
+        (status = 429, response = super::openapi::RateLimited),
+        (status = 500, response = super::openapi::NotStored),
+        (status = 503, response = super::openapi::ShuttingDown),
+    ),
+    security(("bearer" = [])),
+)]
 pub async fn put_object(
     State(app): State<AppState>,
     Path(id): Path<String>,
@@ -171,6 +333,22 @@ pub async fn put_object(
     ))
 }
 
+/// Removes a risk object.
+#[utoipa::path(
+    delete,
+    path = "/api/v1/risk-objects/{id}",
+    tag = "mission",
+    params(("id" = String, Path, description = "The risk object's id.")),
+    responses(
+        (status = 204, description = "Removed, durably."),
+        (status = 401, response = super::openapi::Unauthorized),
+        (status = 404, response = super::openapi::NotFound),
+        (status = 429, response = super::openapi::RateLimited),
+        (status = 500, response = super::openapi::NotStored),
+        (status = 503, response = super::openapi::ShuttingDown),
+    ),
+    security(("bearer" = [])),
+)]
 pub async fn delete_object(
     State(app): State<AppState>,
     Path(id): Path<String>,

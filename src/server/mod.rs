@@ -11,6 +11,7 @@ pub mod auth;
 pub mod config;
 pub mod error;
 pub mod metrics;
+pub mod openapi;
 pub mod state;
 pub mod store;
 pub mod ws;
@@ -125,6 +126,7 @@ pub fn router(app: AppState) -> Router {
         .merge(writes)
         .route("/healthz", get(api::healthz))
         .route("/metrics", get(metrics::render))
+        .route("/api/v1/openapi.json", get(openapi::serve))
         .route("/api/v1/mission", get(api::mission))
         .route("/api/v1/risk-objects", get(api::risk_objects))
         .route("/api/v1/risk-objects/{id}", get(api::get_object))

@@ -1,0 +1,255 @@
+//! The generated API documents: the OpenAPI document of the HTTP API
+//! (`api/openapi.json`, served at `GET /api/v1/openapi.json`) and the JSON
+//! Schema of the vessel link's messages (`api/vessel-link.schema.json`).
+//!
+//! Both come from the serde types in [`crate::protocol`] (`utoipa::ToSchema`,
+//! `schemars::JsonSchema`) and the `#[utoipa::path]` annotations of the
+//! handlers in [`super::api`], so they cannot drift from the code unnoticed:
+//! `tests/api_docs.rs` regenerates them and fails when the committed files
+//! differ (`SEACOVER_BLESS=1 cargo test --test api_docs` rewrites them).
+//! Endpoints whose handlers live elsewhere (`/metrics`, the WebSockets) are
+//! described here by documentation-only functions.
+
+use std::sync::OnceLock;
+
+use axum::http::header::CONTENT_TYPE;
+use axum::response::IntoResponse;
+use schemars::generate::SchemaSettings;
+use serde::{Deserialize, Serialize};
+use utoipa::openapi::security::{ApiKey, ApiKeyValue, HttpAuthScheme, HttpBuilder, SecurityScheme};
+use utoipa::openapi::{ContentBuilder, Ref, RefOr, Response, ResponseBuilder};
+use utoipa::{Modify, OpenApi, ToResponse, ToSchema};
+
+use super::api;
+use crate::protocol::{CoordinatorMessage, ErrorDocument, SnapshotDocument, VesselMessage};
+
+/// The OpenAPI document of the coordinator.
+#[derive(OpenApi)]
+#[openapi(
+    info(
+        title = "seacover coordinator",
+        description = "Coverage control for a fleet of unmanned surface vessels: the mission \
+(region, risk density), the vessels, the coverage partition and the stateless what-if \
+evaluation. Errors are `{\"error\": {\"code\", \"message\"}}`; a rejected request changes \
+nothing. With `--token`, every write and the vessel link need `Authorization: Bearer TOKEN`; \
+reads are public. The vessel link's messages are also in `api/vessel-link.schema.json`.",
+        license(name = "see the repository"),
+    ),
+    paths(
+        api::healthz,
+        metrics,
+        serve,
+        api::mission,
+        api::put_region,
+        api::put_base,
+        api::risk_objects,
+        api::post_object,
+        api::get_object,
+        api::put_object,
+        api::delete_object,
+        api::vessels,
+        api::vessel,
+        api::delete_vessel,
+        api::coverage,
+        api::evaluate,
+        vessel_link,
+        stream,
+    ),
+    components(
+        schemas(ErrorDocument, VesselMessage, CoordinatorMessage, SnapshotDocument),
+        responses(Malformed, Unauthorized, NotFound, Conflict, TooLarge, Invalid, RateLimited, NotStored, ShuttingDown),
+    ),
+    modifiers(&Security),
+    tags(
+        (name = "system", description = "Health, metrics and this document."),
+        (name = "mission", description = "The task region and the risk density."),
+        (name = "vessels", description = "The fleet as the coordinator sees it, and the vessel link."),
+        (name = "coverage", description = "The current partition and the what-if evaluation."),
+    ),
+)]
+pub struct ApiDoc;
+
+/// The bearer token, and `?token=` for WebSocket clients that cannot set
+/// headers (browsers).
+struct Security;
+
+impl Modify for Security {
+    fn modify(&self, openapi: &mut utoipa::openapi::OpenApi) {
+        let components = openapi.components.get_or_insert_with(Default::default);
+        components.add_security_scheme(
+            "bearer",
+            SecurityScheme::Http(
+                HttpBuilder::new()
+                    .scheme(HttpAuthScheme::Bearer)
+                    .description(Some(
+                        "`Authorization: Bearer TOKEN`; required only when the coordinator runs \
+                         with `--token` (or `SEACOVER_TOKEN`). Compared in constant time.",
+                    ))
+                    .build(),
+            ),
+        );
+        components.add_security_scheme(
+            "token_query",
+            SecurityScheme::ApiKey(ApiKey::Query(ApiKeyValue::with_description(
+                "token",
+                "The same token as a query parameter, for WebSocket clients that cannot set \
+                 headers.",
+            ))),
+        );
+    }
+}
+
+/// `PUT /api/v1/mission/risk/base` body: the new base density φ0.
+#[derive(Serialize, Deserialize, ToSchema)]
+pub struct RiskBaseDocument {
+    /// φ0 ≥ 0.
+    pub value: f64,
+}
+
+/// An error answer: `{"error": {"code", "message"}}`.
+fn error_response(description: &str) -> RefOr<Response> {
+    ResponseBuilder::new()
+        .description(description)
+        .content(
+            "application/json",
+            ContentBuilder::new()
+                .schema(Some(Ref::from_schema_name("ErrorDocument")))
+                .build(),
+        )
+        .build()
+        .into()
+}
+
+/// The error responses shared by the operations; each is a component the
+/// `#[utoipa::path]` annotations refer to with `response = ...`.
+macro_rules! error_responses {
+    ($($name:ident => $description:literal,)*) => {$(
+        #[doc = $description]
+        pub struct $name;
+
+        impl<'a> ToResponse<'a> for $name {
+            fn response() -> (&'a str, RefOr<Response>) {
+                (stringify!($name), error_response($description))
+            }
+        }
+    )*};
+}
+
+error_responses! {
+    Malformed => "`malformed`: not UTF-8, not JSON, or not the document's shape.",
+    Unauthorized => "`unauthorized`: the coordinator runs with a token and the request has no valid `Authorization: Bearer TOKEN`.",
+    NotFound => "`not_found`: no such id.",
+    Conflict => "`conflict`: the id is taken.",
+    TooLarge => "`too_large`: the body is over 1 MiB.",
+    Invalid => "`invalid` (out-of-range or non-finite values, bad polygons, bad or duplicate ids, …) or `unsupported` (vessels with different β). The message starts with the offending field.",
+    RateLimited => "`rate_limited`: too many writes; `Retry-After` says when to try again.",
+    NotStored => "`storage`: the change could not be made durable and was not applied.",
+    ShuttingDown => "`shutting_down`: the coordinator is stopping.",
+}
+
+/// Prometheus metrics: vessels connected and live, the tick duration
+/// histogram, skipped ticks, H, messages in, out and rejected by reason.
+#[utoipa::path(
+    get,
+    path = "/metrics",
+    tag = "system",
+    responses(
+        (status = 200, description = "Prometheus text exposition format 0.0.4.", body = String, content_type = "text/plain; version=0.0.4"),
+    ),
+)]
+#[allow(dead_code)] // documentation only: the handler is `super::metrics::render`
+fn metrics() {}
+
+/// This document (the same bytes as `api/openapi.json` in the repository).
+#[utoipa::path(
+    get,
+    path = "/api/v1/openapi.json",
+    tag = "system",
+    responses(
+        (status = 200, description = "The OpenAPI 3.1 document.", body = Object, content_type = "application/json"),
+    ),
+)]
+pub async fn serve() -> impl IntoResponse {
+    ([(CONTENT_TYPE, "application/json")], json())
+}
+
+/// The vessel link (WebSocket). Text frames, one JSON object each: the
+/// vessel sends `hello` first, then `pose` reports (`VesselMessage`); the
+/// coordinator answers `welcome`, then one `command` per tick while the
+/// vessel is live, and `error` for a rejected frame — fatal ones close the
+/// link (`CoordinatorMessage`). Frames are at most 64 KiB; the first must
+/// come within 10 s; five malformed frames close the link. A second link for
+/// the same id replaces the first. JSON Schema of both directions:
+/// `api/vessel-link.schema.json`.
+#[utoipa::path(
+    get,
+    path = "/api/v1/vessels/link",
+    tag = "vessels",
+    params(
+        ("token" = Option<String>, Query, description = "The bearer token, for clients that cannot set headers."),
+    ),
+    responses(
+        (status = 101, description = "Switching Protocols: the link is open."),
+        (status = 400, description = "Not a WebSocket upgrade request.", body = String, content_type = "text/plain"),
+        (status = 401, response = Unauthorized),
+        (status = 426, description = "The connection cannot be upgraded.", body = String, content_type = "text/plain"),
+        (status = 429, response = RateLimited),
+    ),
+    security(("bearer" = []), ("token_query" = [])),
+)]
+#[allow(dead_code)] // documentation only: the handler is `super::ws::link`
+fn vessel_link() {}
+
+/// The dashboard stream (WebSocket, read-only): a `SnapshotDocument` per
+/// text frame — the newest on connect, then every change, at most 10 per
+/// second; a slow client skips to the newest.
+#[utoipa::path(
+    get,
+    path = "/api/v1/stream",
+    tag = "coverage",
+    responses(
+        (status = 101, description = "Switching Protocols: snapshots follow."),
+        (status = 400, description = "Not a WebSocket upgrade request.", body = String, content_type = "text/plain"),
+        (status = 426, description = "The connection cannot be upgraded.", body = String, content_type = "text/plain"),
+    ),
+)]
+#[allow(dead_code)] // documentation only: the handler is `super::ws::stream`
+fn stream() {}
+
+/// `api/openapi.json`: the OpenAPI document as pretty JSON with a final
+/// newline.
+pub fn json() -> &'static str {
+    static DOCUMENT: OnceLock<String> = OnceLock::new();
+    DOCUMENT.get_or_init(|| {
+        let mut text = ApiDoc::openapi()
+            .to_pretty_json()
+            .expect("the OpenAPI document serializes");
+        text.push('\n');
+        text
+    })
+}
+
+/// `api/vessel-link.schema.json`: one JSON Schema (draft 2020-12) for every
+/// frame of the vessel link, either direction, as pretty JSON with a final
+/// newline.
+pub fn vessel_link_schema() -> String {
+    let mut generator = SchemaSettings::draft2020_12().into_generator();
+    let from_vessel = generator.subschema_for::<VesselMessage>();
+    let from_coordinator = generator.subschema_for::<CoordinatorMessage>();
+    let definitions = generator.take_definitions(true);
+    let schema = serde_json::json!({
+        "$schema": "https://json-schema.org/draft/2020-12/schema",
+        "title": "seacover vessel link",
+        "description": "One text frame of the WebSocket `/api/v1/vessels/link`: a JSON object \
+            that is either a `VesselMessage` (vessel → coordinator: `hello` first, then `pose` \
+            reports) or a `CoordinatorMessage` (coordinator → vessel: `welcome`, one `command` \
+            per tick, `error`). Frames are at most 64 KiB. Shapes only: value rules (ids \
+            `[A-Za-z0-9_.-]{1,64}`, protocol 1, finite numbers) are answered with an `error` \
+            frame.",
+        "oneOf": [from_vessel, from_coordinator],
+        "$defs": definitions,
+    });
+    let mut text = serde_json::to_string_pretty(&schema).expect("the schema serializes");
+    text.push('\n');
+    text
+}
