@@ -844,8 +844,11 @@ type Socket =
 async fn handshake(id: &str, shared: &Shared) -> Result<Socket, String> {
     let request = link_request(shared).map_err(|e| format!("bad link URL: {e}"))?;
     // Small frames both ways: send each at once rather than waiting for
-    // the previous one's acknowledgement.
-    let (mut socket, _) = tokio_tungstenite::connect_async_with_config(request, None, true)
+    // the previous one's acknowledgement (no Nagle), and a small read
+    // buffer (tungstenite zero-fills all of it, 128 KiB by default).
+    let config = tokio_tungstenite::tungstenite::protocol::WebSocketConfig::default()
+        .read_buffer_size(4 * 1024);
+    let (mut socket, _) = tokio_tungstenite::connect_async_with_config(request, Some(config), true)
         .await
         .map_err(|e| format!("connecting: {e}"))?;
     let hello = VesselMessage::Hello {
@@ -876,6 +879,26 @@ async fn handshake(id: &str, shared: &Shared) -> Result<Socket, String> {
             Some(Ok(_)) => {}
         }
     }
+}
+
+/// What the client reads of a coordinator frame. Unused fields (the
+/// centroid, the rates, …) are skipped without being built, and a plain
+/// struct avoids the tagged enum's buffering of the whole object: the client
+/// shares the machine with the coordinator, so its cost per frame counts.
+#[derive(serde::Deserialize)]
+struct Incoming<'a> {
+    #[serde(rename = "type", borrow)]
+    kind: std::borrow::Cow<'a, str>,
+    #[serde(default)]
+    tick: u64,
+    #[serde(default)]
+    u_d: f64,
+    #[serde(default)]
+    r_d: f64,
+    #[serde(default)]
+    code: Option<String>,
+    #[serde(default)]
+    message: Option<String>,
 }
 
 /// One vessel link: handshake, then poses at the rate and commands in,
@@ -928,10 +951,47 @@ async fn run_link(
     let mut pending: Vec<Instant> = Vec::with_capacity(4);
     let ended = loop {
         tokio::select! {
+            // Frames before poses, so that a command's receive time is not
+            // delayed by sending a pose that fell due at the same moment.
+            biased;
             _ = stop.cancelled() => {
                 let _ = sink.send(Message::Close(None)).await;
                 break None;
             }
+            frame = stream.next() => match frame {
+                Some(Ok(Message::Text(t))) => {
+                    let at = Instant::now();
+                    match serde_json::from_str::<Incoming>(&t) {
+                        Ok(c) if c.kind == "command" => {
+                            out.pose_latency.extend(pending.drain(..).map(|s| (at - s).as_secs_f64()));
+                            if shared.in_window(at) {
+                                out.commands += 1;
+                                out.tick_offsets.push(
+                                    (at - shared.origin).as_secs_f64() - c.tick as f64 / shared.tick_rate,
+                                );
+                            }
+                            (u, r) = (c.u_d, c.r_d);
+                            if !commanded {
+                                commanded = true;
+                                shared.commanded.fetch_add(1, Ordering::Relaxed);
+                            }
+                        }
+                        Ok(c) if c.kind == "error" => {
+                            let (code, message) = (c.code.unwrap_or_default(), c.message.unwrap_or_default());
+                            break Some(format!("error frame: {code}: {message}"));
+                        }
+                        Ok(c) if c.kind == "welcome" => {}
+                        Ok(c) => break Some(format!("unknown frame type {:?}", c.kind)),
+                        Err(e) => break Some(format!("unreadable frame: {e}")),
+                    }
+                }
+                Some(Ok(Message::Close(frame))) => {
+                    break Some(format!("closed by the coordinator ({frame:?})"));
+                }
+                None => break Some("closed by the coordinator".into()),
+                Some(Err(e)) => break Some(format!("link error: {e}")),
+                Some(Ok(_)) => {}
+            },
             _ = ticker.tick() => {
                 psi = (psi + r * dt).rem_euclid(std::f64::consts::TAU);
                 let next = Point { x: x + u * psi.cos() * dt, y: y + u * psi.sin() * dt };
@@ -958,38 +1018,6 @@ async fn run_link(
                     pending.push(sent);
                 }
             }
-            frame = stream.next() => match frame {
-                Some(Ok(Message::Text(t))) => {
-                    let at = Instant::now();
-                    match serde_json::from_str::<CoordinatorMessage>(&t) {
-                        Ok(CoordinatorMessage::Command(c)) => {
-                            out.pose_latency.extend(pending.drain(..).map(|s| (at - s).as_secs_f64()));
-                            if shared.in_window(at) {
-                                out.commands += 1;
-                                out.tick_offsets.push(
-                                    (at - shared.origin).as_secs_f64() - c.tick as f64 / shared.tick_rate,
-                                );
-                            }
-                            (u, r) = (c.u_d, c.r_d);
-                            if !commanded {
-                                commanded = true;
-                                shared.commanded.fetch_add(1, Ordering::Relaxed);
-                            }
-                        }
-                        Ok(CoordinatorMessage::Error { code, message }) => {
-                            break Some(format!("error frame: {code}: {message}"));
-                        }
-                        Ok(CoordinatorMessage::Welcome { .. }) => {}
-                        Err(e) => break Some(format!("unreadable frame: {e}")),
-                    }
-                }
-                Some(Ok(Message::Close(frame))) => {
-                    break Some(format!("closed by the coordinator ({frame:?})"));
-                }
-                None => break Some("closed by the coordinator".into()),
-                Some(Err(e)) => break Some(format!("link error: {e}")),
-                Some(Ok(_)) => {}
-            },
         }
     };
     if let Some(problem) = ended {

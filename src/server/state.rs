@@ -678,11 +678,16 @@ impl Coordinator {
                 cells: Vec::new(),
             },
         };
+        // An index rather than a search per vessel, which made publishing
+        // quadratic: milliseconds of a 1000-vessel tick, holding a worker
+        // thread while the links were sending that tick's commands.
+        let cells: std::collections::HashMap<&str, &crate::protocol::CellDocument> =
+            coverage.cells.iter().map(|c| (c.id.as_str(), c)).collect();
         let vessels = self
             .vessels
             .iter()
             .map(|(id, e)| {
-                let cell = coverage.cells.iter().find(|c| &c.id == id);
+                let cell = cells.get(id.as_str()).copied();
                 VesselStatusDocument {
                     id: id.clone(),
                     connected: e.link.is_some(),

@@ -24,6 +24,11 @@ use crate::scenario::valid_id;
 pub const MAX_FRAME: usize = 64 * 1024;
 /// Malformed frames tolerated on one link before it is closed.
 const MAX_GARBAGE: u32 = 5;
+/// Initial read buffer of a socket. tungstenite zero-fills its whole read
+/// buffer (128 KiB by default) before the first read, which made every link
+/// cost 128 KiB of resident memory for frames of a few hundred bytes; the
+/// buffer still grows to any frame up to [`MAX_FRAME`].
+const READ_BUFFER: usize = 4 * 1024;
 
 fn text(msg: &CoordinatorMessage) -> Message {
     let kind = match msg {
@@ -49,6 +54,7 @@ pub async fn link(ws: WebSocketUpgrade, State(app): State<AppState>) -> Response
     let tracker = app.tracker.clone();
     ws.max_message_size(MAX_FRAME)
         .max_frame_size(MAX_FRAME)
+        .read_buffer_size(READ_BUFFER)
         .on_upgrade(move |socket| tracker.track_future(run_link(socket, app)))
 }
 
@@ -140,6 +146,10 @@ async fn run_link(socket: WebSocket, app: AppState) {
     let mut garbage = 0;
     loop {
         tokio::select! {
+            // In this order: a command waiting behind a pose that is being
+            // read and forwarded only arrives later. Commands come once a
+            // tick, so they cannot starve the poses.
+            biased;
             _ = app.shutdown.cancelled() => {
                 let _ = sink.send(text(&error("shutting_down", "the coordinator is shutting down"))).await;
                 break;
@@ -197,6 +207,7 @@ async fn refuse(mut sink: impl SinkExt<Message> + Unpin, message: CoordinatorMes
 pub async fn stream(ws: WebSocketUpgrade, State(app): State<AppState>) -> Response {
     let tracker = app.tracker.clone();
     ws.max_message_size(MAX_FRAME)
+        .read_buffer_size(READ_BUFFER)
         .on_upgrade(move |socket| tracker.track_future(run_stream(socket, app)))
 }
 
