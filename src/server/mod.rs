@@ -14,6 +14,7 @@ pub mod metrics;
 pub mod openapi;
 pub mod state;
 pub mod store;
+pub mod web;
 pub mod ws;
 
 use std::net::SocketAddr;
@@ -124,6 +125,8 @@ pub fn router(app: AppState) -> Router {
         ));
     Router::new()
         .merge(writes)
+        .route("/", get(web::index))
+        .route("/{file}", get(web::asset))
         .route("/healthz", get(api::healthz))
         .route("/metrics", get(metrics::render))
         .route("/api/v1/openapi.json", get(openapi::serve))

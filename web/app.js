@@ -1,0 +1,345 @@
+// The dashboard: the stream's snapshots drive the map, the charts and the
+// vessel table; the operator's edits go through the REST API (api.js), and
+// the next snapshot shows their effect.
+
+import { write, askToken, token, showError } from "./api.js";
+import { MapView, ramp } from "./map.js";
+import { Series, drawChart } from "./charts.js";
+
+const $ = (id) => document.getElementById(id);
+const canvas = $("map");
+const view = new MapView(canvas);
+const state = {
+  snapshot: null,
+  selectedObject: null,
+  selectedVessel: null,
+  h: new Series(1200),
+  vesselSeries: { u: new Series(), r: new Series(), obs: new Series() },
+  tableDrawn: 0,
+  snapshots: 0,
+};
+// For people poking from the console, and for the browser tests.
+window.seacover = { view, state };
+
+// ---- stream -----------------------------------------------------------------
+
+function setStatus(kind, text) {
+  const s = $("status");
+  s.dataset.state = kind;
+  s.textContent = text;
+}
+
+function connect(delay = 500) {
+  const scheme = location.protocol === "https:" ? "wss" : "ws";
+  const ws = new WebSocket(`${scheme}://${location.host}/api/v1/stream`);
+  let opened = false;
+  ws.onopen = () => {
+    opened = true;
+    setStatus("live", "live");
+  };
+  ws.onmessage = (event) => {
+    try {
+      onSnapshot(JSON.parse(event.data));
+    } catch (e) {
+      console.warn("seacover: a snapshot could not be shown", e);
+    }
+  };
+  ws.onclose = () => {
+    // Reconnect with backoff: 0.5 s doubling to 5 s, reset once connected.
+    const next = opened ? 500 : Math.min(delay * 2, 5000);
+    setStatus("lost", `reconnecting in ${(next / 1000).toFixed(1)} s`);
+    setTimeout(() => {
+      setStatus("connecting", "connecting…");
+      connect(next);
+    }, next);
+  };
+  ws.onerror = () => ws.close();
+}
+
+function onSnapshot(snap) {
+  state.snapshot = snap;
+  state.snapshots += 1;
+  document.body.dataset.tick = String(snap.tick);
+  view.setSnapshot(snap);
+  state.h.push(snap.time, snap.H);
+  const live = snap.vessels.filter((v) => v.live).length;
+  $("summary").textContent =
+    `t = ${snap.time.toFixed(1)} s · H = ${snap.H.toFixed(1)} · ${live}/${snap.vessels.length} vessels live`;
+  if (document.activeElement !== $("base-input")) $("base-input").value = snap.mission.risk.base;
+  syncObjectForm();
+  const v = snap.vessels.find((v) => v.id === state.selectedVessel);
+  if (v && v.pose) {
+    const cmd = v.last_command;
+    state.vesselSeries.u.push(snap.time, v.pose.u, cmd ? cmd.u_d : NaN);
+    state.vesselSeries.r.push(snap.time, v.pose.r, cmd ? cmd.r_d : NaN);
+    const tel = v.pose.telemetry;
+    if (tel && tel.tau_d && tel.tau_d_hat) {
+      const e = Math.hypot(...tel.tau_d.map((d, k) => d - tel.tau_d_hat[k]));
+      state.vesselSeries.obs.push(snap.time, e);
+    }
+  }
+  // The table is DOM: redraw it at most 4 times a second.
+  const now = performance.now();
+  if (now - state.tableDrawn > 250) {
+    state.tableDrawn = now;
+    drawTable(snap);
+  }
+  drawCharts();
+}
+
+// ---- vessel table -------------------------------------------------------------
+
+function drawTable(snap) {
+  const body = $("vessels").tBodies[0];
+  const rows = snap.vessels.map((v) => {
+    const e = v.last_command ? v.last_command.E.toFixed(2) : "–";
+    const speed = v.pose ? Math.hypot(v.pose.u, v.pose.v).toFixed(2) : "–";
+    const seen = v.last_seen == null ? "never" : `${Math.max(0, snap.time - v.last_seen).toFixed(1)} s ago`;
+    const sel = v.id === state.selectedVessel ? " class=\"selected\"" : "";
+    const link = v.connected ? (v.live ? "live" : "silent") : "off";
+    return `<tr data-vessel-id="${escape(v.id)}"${sel}><td>${escape(v.id)}</td>` +
+      `<td class="${v.connected ? "" : "off"}">${link}</td><td>${e}</td><td>${speed}</td><td>${seen}</td></tr>`;
+  });
+  body.innerHTML = rows.join("");
+  $("vessel-count").textContent = `(${snap.vessels.length})`;
+}
+
+function escape(s) {
+  return String(s).replace(/[&<>"']/g, (c) => `&#${c.charCodeAt(0)};`);
+}
+
+$("vessels").tBodies[0].addEventListener("click", (event) => {
+  const row = event.target.closest("tr[data-vessel-id]");
+  if (!row) return;
+  selectVessel(row.dataset.vesselId === state.selectedVessel ? null : row.dataset.vesselId);
+});
+
+function selectVessel(id) {
+  state.selectedVessel = id;
+  view.selectedVessel = id;
+  view.follow = id !== null;
+  for (const s of Object.values(state.vesselSeries)) s.clear();
+  $("vessel-charts").hidden = id === null;
+  $("chart-vessel").textContent = id ?? "";
+  view.dirty = true;
+  if (state.snapshot) drawTable(state.snapshot);
+}
+
+// ---- charts ---------------------------------------------------------------------
+
+function drawCharts() {
+  drawChart($("chart-h"), state.h, ["H(P)"], ["#4fb3ff"]);
+  if (state.selectedVessel) {
+    drawChart($("chart-u"), state.vesselSeries.u, ["u", "u_d"], ["#7be07b", "#ffb84f"]);
+    drawChart($("chart-r"), state.vesselSeries.r, ["r", "r_d"], ["#7be07b", "#ffb84f"]);
+    drawChart($("chart-obs"), state.vesselSeries.obs, ["‖τ_d − τ̂_d‖"], ["#ff7bd5"]);
+  }
+}
+
+// ---- legend ---------------------------------------------------------------------
+
+view.onLegend = (min, max) => {
+  const bar = $("legend-bar");
+  const ctx = bar.getContext("2d");
+  for (let i = 0; i < bar.width; i++) {
+    const [r, g, b] = ramp(i / (bar.width - 1));
+    ctx.fillStyle = `rgb(${r},${g},${b})`;
+    ctx.fillRect(i, 0, 1, bar.height);
+  }
+  $("legend-min").textContent = min.toPrecision(3);
+  $("legend-max").textContent = max.toPrecision(3);
+};
+
+// ---- risk objects ---------------------------------------------------------------
+
+function objects() {
+  return state.snapshot ? state.snapshot.mission.risk.objects : [];
+}
+
+function selectObject(id) {
+  state.selectedObject = id;
+  view.selectedObject = id;
+  view.dirty = true;
+  const form = $("object-form");
+  form.hidden = id === null;
+  if (id !== null) {
+    const o = objects().find((o) => o.id === id);
+    if (o) {
+      $("object-id").textContent = id;
+      $("alpha-input").value = o.alpha;
+      $("sigma-input").value = o.sigma;
+    }
+  }
+}
+
+function syncObjectForm() {
+  if (state.selectedObject && !objects().some((o) => o.id === state.selectedObject)) selectObject(null);
+}
+
+function regionSize() {
+  const p = state.snapshot.mission.region.polygon;
+  const xs = p.map((q) => q[0]);
+  const ys = p.map((q) => q[1]);
+  return Math.max(Math.max(...xs) - Math.min(...xs), Math.max(...ys) - Math.min(...ys));
+}
+
+async function addObject(x, y) {
+  const sigma = +(regionSize() * 0.08).toPrecision(3);
+  try {
+    const created = await write("POST", "/api/v1/risk-objects", { x, y, alpha: 10, sigma });
+    // Show it at once; the stream confirms it within a tick.
+    state.snapshot.mission.risk.objects.push(created);
+    selectObject(created.id);
+  } catch {
+    // write() has shown the error.
+  }
+}
+
+async function moveObject(id, x, y) {
+  const o = objects().find((o) => o.id === id);
+  if (!o) return;
+  try {
+    const saved = await write("PUT", `/api/v1/risk-objects/${encodeURIComponent(id)}`, {
+      x, y, alpha: o.alpha, sigma: o.sigma,
+    });
+    Object.assign(o, saved);
+  } catch {
+    // Shown; the next snapshot puts it back where the server has it.
+  }
+  view.dragObject = null;
+  view.dirty = true;
+}
+
+$("object-form").addEventListener("submit", async (event) => {
+  event.preventDefault();
+  const id = state.selectedObject;
+  const o = objects().find((o) => o.id === id);
+  if (!o) return;
+  try {
+    const saved = await write("PUT", `/api/v1/risk-objects/${encodeURIComponent(id)}`, {
+      x: o.x, y: o.y, alpha: Number($("alpha-input").value), sigma: Number($("sigma-input").value),
+    });
+    Object.assign(o, saved);
+    view.dirty = true;
+  } catch {
+    // Shown.
+  }
+});
+
+$("object-delete").addEventListener("click", async () => {
+  const id = state.selectedObject;
+  if (!id) return;
+  try {
+    await write("DELETE", `/api/v1/risk-objects/${encodeURIComponent(id)}`);
+    const list = objects();
+    const i = list.findIndex((o) => o.id === id);
+    if (i >= 0) list.splice(i, 1);
+    selectObject(null);
+  } catch {
+    // Shown.
+  }
+});
+
+$("object-close").addEventListener("click", () => selectObject(null));
+
+$("base-form").addEventListener("submit", async (event) => {
+  event.preventDefault();
+  try {
+    await write("PUT", "/api/v1/mission/risk/base", { value: Number($("base-input").value) });
+  } catch {
+    // Shown.
+  }
+  $("base-input").blur();
+});
+
+$("token-button").addEventListener("click", async () => {
+  await askToken(token() ? "Replace the stored token:" : "Token for changes:");
+});
+
+// ---- pointer: click adds, drag moves an object or pans, wheel zooms ----------
+
+let press = null; // { id, x, y, object, moved }
+const pointers = new Map();
+
+function local(event) {
+  const r = canvas.getBoundingClientRect();
+  return [event.clientX - r.left, event.clientY - r.top];
+}
+
+canvas.addEventListener("pointerdown", (event) => {
+  canvas.setPointerCapture(event.pointerId);
+  const [sx, sy] = local(event);
+  pointers.set(event.pointerId, [sx, sy]);
+  if (pointers.size > 1) {
+    press = null; // a pinch, not a click
+    return;
+  }
+  const object = view.objectAt(sx, sy);
+  press = { x: sx, y: sy, lastX: sx, lastY: sy, object: object ? object.id : null, moved: false };
+});
+
+canvas.addEventListener("pointermove", (event) => {
+  const [sx, sy] = local(event);
+  if (pointers.size === 2 && pointers.has(event.pointerId)) {
+    const [a, b] = [...pointers.values()];
+    const before = Math.hypot(a[0] - b[0], a[1] - b[1]);
+    pointers.set(event.pointerId, [sx, sy]);
+    const [c, d] = [...pointers.values()];
+    const after = Math.hypot(c[0] - d[0], c[1] - d[1]);
+    if (before > 0) view.zoom(after / before, (c[0] + d[0]) / 2, (c[1] + d[1]) / 2);
+    return;
+  }
+  if (pointers.has(event.pointerId)) pointers.set(event.pointerId, [sx, sy]);
+  if (!press) return;
+  if (!press.moved && Math.hypot(sx - press.x, sy - press.y) < 4) return;
+  press.moved = true;
+  canvas.classList.add("dragging");
+  if (press.object) {
+    const [wx, wy] = view.toWorld(sx, sy);
+    view.dragObject = { id: press.object, x: wx, y: wy };
+    view.dirty = true;
+  } else {
+    view.follow = false;
+    view.pan(sx - press.lastX, sy - press.lastY);
+  }
+  press.lastX = sx;
+  press.lastY = sy;
+});
+
+function release(event) {
+  pointers.delete(event.pointerId);
+  canvas.classList.remove("dragging");
+  const p = press;
+  press = null;
+  if (!p || event.type === "pointercancel" || !state.snapshot) return;
+  const [sx, sy] = local(event);
+  const [wx, wy] = view.toWorld(sx, sy);
+  if (p.object && p.moved) {
+    moveObject(p.object, wx, wy);
+  } else if (p.object) {
+    selectObject(p.object);
+  } else if (!p.moved) {
+    addObject(wx, wy);
+  }
+}
+canvas.addEventListener("pointerup", release);
+canvas.addEventListener("pointercancel", release);
+
+canvas.addEventListener("wheel", (event) => {
+  event.preventDefault();
+  const [sx, sy] = local(event);
+  view.zoom(Math.exp(-event.deltaY * 0.0015), sx, sy);
+}, { passive: false });
+
+$("zoom-in").addEventListener("click", () => view.zoom(1.25));
+$("zoom-out").addEventListener("click", () => view.zoom(0.8));
+$("zoom-fit").addEventListener("click", () => {
+  view.follow = false;
+  view.fit();
+});
+
+window.addEventListener("unhandledrejection", (event) => {
+  showError(`unexpected: ${event.reason}`);
+});
+
+connect();

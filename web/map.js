@@ -1,0 +1,363 @@
+// The map: one canvas, redrawn once per animation frame when something
+// changed. World coordinates are metres, x east and y north; the view maps
+// them to CSS pixels with a uniform scale (y flipped). Nothing on the map is a
+// DOM node, so 1000 vessels cost one canvas, not 1000 elements.
+
+const TRAIL = 60; // points of trail per vessel
+const PALETTE = [
+  "#4fb3ff", "#ffb84f", "#7be07b", "#ff7bd5", "#b99cff", "#ffe25a", "#5ae0d8", "#ff8a6b",
+  "#9fd16b", "#6b9fff", "#e0a15a", "#d16b9f",
+];
+
+export function colourOf(index) {
+  // Beyond the palette, spread hues by the golden angle.
+  if (index < PALETTE.length) return PALETTE[index];
+  return `hsl(${(index * 137.508) % 360} 70% 62%)`;
+}
+
+/** Φ at (x, y): base plus Gaussian objects (SPEC §2, eq. 5). */
+export function density(risk, x, y) {
+  let phi = risk.base;
+  for (const o of risk.objects) {
+    const dx = x - o.x;
+    const dy = y - o.y;
+    phi += o.alpha * Math.exp(-(dx * dx + dy * dy) / (2 * o.sigma * o.sigma));
+  }
+  return phi;
+}
+
+function bounds(polygon) {
+  let x0 = Infinity, y0 = Infinity, x1 = -Infinity, y1 = -Infinity;
+  for (const [x, y] of polygon) {
+    x0 = Math.min(x0, x); y0 = Math.min(y0, y);
+    x1 = Math.max(x1, x); y1 = Math.max(y1, y);
+  }
+  return { x0, y0, x1, y1 };
+}
+
+/** A colour ramp from deep blue through teal and yellow to red, t in [0, 1]. */
+export function ramp(t) {
+  const stops = [
+    [0.0, [20, 30, 70]],
+    [0.35, [20, 110, 140]],
+    [0.65, [220, 200, 60]],
+    [1.0, [210, 50, 40]],
+  ];
+  t = Math.min(1, Math.max(0, t));
+  for (let i = 1; i < stops.length; i++) {
+    if (t <= stops[i][0]) {
+      const [ta, a] = stops[i - 1];
+      const [tb, b] = stops[i];
+      const u = (t - ta) / (tb - ta);
+      return [0, 1, 2].map((k) => Math.round(a[k] + u * (b[k] - a[k])));
+    }
+  }
+  return stops[stops.length - 1][1];
+}
+
+export class MapView {
+  constructor(canvas) {
+    this.canvas = canvas;
+    this.ctx = canvas.getContext("2d");
+    this.scale = 1;
+    this.ox = 0;
+    this.oy = 0;
+    this.fitted = false;
+    this.mission = null;
+    this.vessels = [];
+    this.trails = new Map();
+    this.selectedObject = null;
+    this.selectedVessel = null;
+    this.follow = false;
+    this.heat = null; // { canvas, x0, y0, x1, y1, min, max }
+    this.heatKey = "";
+    this.dirty = true;
+    this.dragObject = null; // { id, x, y } while an object is dragged
+    new ResizeObserver(() => this.resize()).observe(canvas);
+    this.resize();
+    const frame = () => {
+      if (this.dirty) {
+        this.dirty = false;
+        this.draw();
+      }
+      requestAnimationFrame(frame);
+    };
+    requestAnimationFrame(frame);
+  }
+
+  resize() {
+    const r = this.canvas.getBoundingClientRect();
+    const dpr = window.devicePixelRatio || 1;
+    this.width = Math.max(1, r.width);
+    this.height = Math.max(1, r.height);
+    this.canvas.width = Math.round(this.width * dpr);
+    this.canvas.height = Math.round(this.height * dpr);
+    this.dpr = dpr;
+    if (!this.fitted) this.fit();
+    this.dirty = true;
+  }
+
+  toScreen(x, y) {
+    return [this.ox + this.scale * x, this.oy - this.scale * y];
+  }
+
+  toWorld(sx, sy) {
+    return [(sx - this.ox) / this.scale, (this.oy - sy) / this.scale];
+  }
+
+  /** Fits the whole region into the canvas with a margin. */
+  fit() {
+    if (!this.mission) return;
+    const b = bounds(this.mission.region.polygon);
+    const w = Math.max(b.x1 - b.x0, 1e-9);
+    const h = Math.max(b.y1 - b.y0, 1e-9);
+    const margin = 24;
+    this.scale = Math.min((this.width - 2 * margin) / w, (this.height - 2 * margin) / h);
+    if (!(this.scale > 0)) this.scale = 1;
+    this.ox = this.width / 2 - this.scale * (b.x0 + w / 2);
+    this.oy = this.height / 2 + this.scale * (b.y0 + h / 2);
+    this.fitted = true;
+    this.dirty = true;
+  }
+
+  /** Zooms by `factor` keeping the world point under (sx, sy) in place. */
+  zoom(factor, sx = this.width / 2, sy = this.height / 2) {
+    const [wx, wy] = this.toWorld(sx, sy);
+    this.scale *= factor;
+    this.ox = sx - this.scale * wx;
+    this.oy = sy + this.scale * wy;
+    this.dirty = true;
+  }
+
+  pan(dx, dy) {
+    this.ox += dx;
+    this.oy += dy;
+    this.dirty = true;
+  }
+
+  setSnapshot(snapshot) {
+    const first = !this.mission;
+    this.mission = snapshot.mission;
+    this.vessels = snapshot.vessels;
+    for (const v of snapshot.vessels) {
+      if (!v.pose) continue;
+      let trail = this.trails.get(v.id);
+      if (!trail) this.trails.set(v.id, (trail = []));
+      const last = trail[trail.length - 1];
+      if (!last || Math.hypot(last[0] - v.pose.x, last[1] - v.pose.y) > 0.05) {
+        trail.push([v.pose.x, v.pose.y]);
+        if (trail.length > TRAIL) trail.shift();
+      }
+    }
+    if (first) this.fit();
+    if (this.follow && this.selectedVessel) {
+      const v = this.vessels.find((v) => v.id === this.selectedVessel);
+      if (v && v.pose) {
+        const [sx, sy] = this.toScreen(v.pose.x, v.pose.y);
+        this.pan(this.width / 2 - sx, this.height / 2 - sy);
+      }
+    }
+    this.dirty = true;
+  }
+
+  /** The risk object under a screen point, if any. */
+  objectAt(sx, sy) {
+    if (!this.mission) return null;
+    let best = null;
+    let bestD = Infinity;
+    for (const o of this.mission.risk.objects) {
+      const [ox, oy] = this.toScreen(o.x, o.y);
+      const d = Math.hypot(sx - ox, sy - oy);
+      const reach = Math.max(10, Math.min(this.scale * o.sigma, 40));
+      if (d <= reach && d < bestD) {
+        best = o;
+        bestD = d;
+      }
+    }
+    return best;
+  }
+
+  /** Recomputes the heat map image when the risk or region changed. */
+  heatImage() {
+    const m = this.mission;
+    const key = JSON.stringify([m.risk, m.region.polygon]);
+    if (key === this.heatKey && this.heat) return this.heat;
+    const b = bounds(m.region.polygon);
+    const n = 160;
+    const aspect = (b.y1 - b.y0) / Math.max(b.x1 - b.x0, 1e-9);
+    const nx = aspect > 1 ? Math.max(8, Math.round(n / aspect)) : n;
+    const ny = aspect > 1 ? n : Math.max(8, Math.round(n * aspect));
+    const values = new Float64Array(nx * ny);
+    let min = Infinity, max = -Infinity;
+    for (let j = 0; j < ny; j++) {
+      const y = b.y1 - ((j + 0.5) / ny) * (b.y1 - b.y0);
+      for (let i = 0; i < nx; i++) {
+        const x = b.x0 + ((i + 0.5) / nx) * (b.x1 - b.x0);
+        const phi = density(m.risk, x, y);
+        values[j * nx + i] = phi;
+        min = Math.min(min, phi);
+        max = Math.max(max, phi);
+      }
+    }
+    const off = document.createElement("canvas");
+    off.width = nx;
+    off.height = ny;
+    const octx = off.getContext("2d");
+    const img = octx.createImageData(nx, ny);
+    const span = max - min || 1;
+    for (let k = 0; k < values.length; k++) {
+      const [r, g, bl] = ramp((values[k] - min) / span);
+      img.data[4 * k] = r;
+      img.data[4 * k + 1] = g;
+      img.data[4 * k + 2] = bl;
+      img.data[4 * k + 3] = 255;
+    }
+    octx.putImageData(img, 0, 0);
+    this.heat = { canvas: off, ...b, min, max };
+    this.heatKey = key;
+    this.onLegend?.(min, max);
+    return this.heat;
+  }
+
+  ring(ctx, points) {
+    points.forEach(([x, y], i) => {
+      const [sx, sy] = this.toScreen(x, y);
+      if (i === 0) ctx.moveTo(sx, sy);
+      else ctx.lineTo(sx, sy);
+    });
+    ctx.closePath();
+  }
+
+  draw() {
+    const ctx = this.ctx;
+    ctx.setTransform(this.dpr, 0, 0, this.dpr, 0, 0);
+    ctx.fillStyle = "#0b1118";
+    ctx.fillRect(0, 0, this.width, this.height);
+    const m = this.mission;
+    if (!m) return;
+
+    // Heat map clipped to Q (outer ring minus holes, even-odd).
+    const heat = this.heatImage();
+    ctx.save();
+    ctx.beginPath();
+    this.ring(ctx, m.region.polygon);
+    for (const hole of m.region.holes) this.ring(ctx, hole);
+    ctx.clip("evenodd");
+    const [hx, hy] = this.toScreen(heat.x0, heat.y1);
+    ctx.imageSmoothingEnabled = true;
+    ctx.globalAlpha = 0.85;
+    ctx.drawImage(heat.canvas, hx, hy, this.scale * (heat.x1 - heat.x0), this.scale * (heat.y1 - heat.y0));
+    ctx.restore();
+
+    // Region outline and holes.
+    ctx.lineWidth = 1.5;
+    ctx.strokeStyle = "#d8e2ea";
+    ctx.beginPath();
+    this.ring(ctx, m.region.polygon);
+    ctx.stroke();
+    ctx.fillStyle = "#27323d";
+    for (const hole of m.region.holes) {
+      ctx.beginPath();
+      this.ring(ctx, hole);
+      ctx.fill();
+      ctx.stroke();
+    }
+
+    // Cells, each in its vessel's colour.
+    const index = new Map(this.vessels.map((v, i) => [v.id, i]));
+    ctx.lineWidth = 1;
+    for (const v of this.vessels) {
+      if (!v.polygon) continue;
+      const colour = colourOf(index.get(v.id));
+      ctx.beginPath();
+      this.ring(ctx, v.polygon);
+      ctx.globalAlpha = v.id === this.selectedVessel ? 0.35 : 0.16;
+      ctx.fillStyle = colour;
+      ctx.fill();
+      ctx.globalAlpha = 0.9;
+      ctx.strokeStyle = colour;
+      ctx.stroke();
+    }
+    ctx.globalAlpha = 1;
+
+    // Risk objects: circles of radius σ, centre dot.
+    for (const o of m.risk.objects) {
+      const dragged = this.dragObject && this.dragObject.id === o.id ? this.dragObject : o;
+      const [sx, sy] = this.toScreen(dragged.x, dragged.y);
+      ctx.beginPath();
+      ctx.arc(sx, sy, Math.max(3, this.scale * o.sigma), 0, 2 * Math.PI);
+      ctx.setLineDash([5, 4]);
+      ctx.lineWidth = o.id === this.selectedObject ? 2.5 : 1.2;
+      ctx.strokeStyle = o.id === this.selectedObject ? "#ffffff" : "rgba(255,255,255,0.7)";
+      ctx.stroke();
+      ctx.setLineDash([]);
+      ctx.beginPath();
+      ctx.arc(sx, sy, 3, 0, 2 * Math.PI);
+      ctx.fillStyle = "#fff";
+      ctx.fill();
+    }
+
+    // Trails, centroids, errors and boats. Glyph size in pixels, not metres,
+    // so a boat stays visible at any zoom; thinned out for huge fleets.
+    const many = this.vessels.length > 200;
+    for (const v of this.vessels) {
+      if (!v.pose) continue;
+      const colour = colourOf(index.get(v.id));
+      const trail = this.trails.get(v.id);
+      if (trail && trail.length > 1 && !many) {
+        for (let k = 1; k < trail.length; k++) {
+          const [ax, ay] = this.toScreen(...trail[k - 1]);
+          const [bx, by] = this.toScreen(...trail[k]);
+          ctx.globalAlpha = (k / trail.length) * 0.8;
+          ctx.strokeStyle = colour;
+          ctx.lineWidth = 1.5;
+          ctx.beginPath();
+          ctx.moveTo(ax, ay);
+          ctx.lineTo(bx, by);
+          ctx.stroke();
+        }
+        ctx.globalAlpha = 1;
+      }
+      const [px, py] = this.toScreen(v.pose.x, v.pose.y);
+      if (v.centroid) {
+        const [cx, cy] = this.toScreen(v.centroid[0], v.centroid[1]);
+        ctx.strokeStyle = colour;
+        ctx.lineWidth = 1;
+        ctx.setLineDash([3, 3]);
+        ctx.beginPath();
+        ctx.moveTo(px, py);
+        ctx.lineTo(cx, cy);
+        ctx.stroke();
+        ctx.setLineDash([]);
+        ctx.beginPath();
+        ctx.moveTo(cx - 4, cy - 4);
+        ctx.lineTo(cx + 4, cy + 4);
+        ctx.moveTo(cx - 4, cy + 4);
+        ctx.lineTo(cx + 4, cy - 4);
+        ctx.stroke();
+      }
+      // The boat: a pointed hull along the heading (screen y is flipped).
+      const size = many ? 5 : 9;
+      const c = Math.cos(v.pose.psi);
+      const s = Math.sin(v.pose.psi);
+      const pt = (fx, fy) => [px + size * (fx * c - fy * s), py - size * (fx * s + fy * c)];
+      ctx.beginPath();
+      ctx.moveTo(...pt(1.2, 0));
+      ctx.lineTo(...pt(0.2, 0.55));
+      ctx.lineTo(...pt(-0.9, 0.5));
+      ctx.lineTo(...pt(-0.9, -0.5));
+      ctx.lineTo(...pt(0.2, -0.55));
+      ctx.closePath();
+      ctx.fillStyle = v.connected ? colour : "#777";
+      ctx.fill();
+      ctx.lineWidth = v.id === this.selectedVessel ? 2.5 : 1;
+      ctx.strokeStyle = v.id === this.selectedVessel ? "#fff" : "#0b1118";
+      ctx.stroke();
+      if (!many) {
+        ctx.fillStyle = "#e8eef3";
+        ctx.font = "11px system-ui, sans-serif";
+        ctx.fillText(v.id, px + 10, py - 8);
+      }
+    }
+  }
+}
