@@ -1,0 +1,397 @@
+//! The dashboard in a real browser: Debian's chromium, headless, driven
+//! through chromedriver (WebDriver) by fantoccini, against the real server
+//! and real agents. Screenshots land in `target/dashboard/` for people to
+//! look at.
+//!
+//! Without chromium and chromedriver the test says so and passes, except
+//! under `CI=true`, where it fails: CI installs them (`scripts/test`).
+
+use std::net::SocketAddr;
+use std::path::PathBuf;
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use fantoccini::actions::{InputSource, MOUSE_BUTTON_LEFT, MouseActions, PointerAction};
+use fantoccini::{Client, ClientBuilder, Locator};
+use seacover::agent::{AgentConfig, paper_vessels, run_fleet};
+use seacover::control::model::VesselParams;
+use seacover::protocol::RiskObjectDocument;
+use seacover::server::{ServeConfig, serve};
+use serde_json::{Value, json};
+use tokio::net::TcpListener;
+use tokio_util::sync::CancellationToken;
+
+const TOKEN: &str = "harbour-master";
+
+fn find(program: &str) -> Option<PathBuf> {
+    std::env::var_os("PATH")?
+        .to_str()?
+        .split(':')
+        .map(|dir| PathBuf::from(dir).join(program))
+        .find(|p| p.is_file())
+}
+
+/// chromedriver and a chromium binary, or the reason they are missing.
+fn browser() -> Result<(PathBuf, PathBuf), String> {
+    let driver = find("chromedriver").ok_or("chromedriver is not installed")?;
+    let chrome = ["chromium", "chromium-browser", "google-chrome"]
+        .iter()
+        .find_map(|p| find(p))
+        .ok_or("chromium is not installed")?;
+    Ok((driver, chrome))
+}
+
+struct Driver(Child);
+
+impl Drop for Driver {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+async fn start_driver(driver: &PathBuf) -> (Driver, u16) {
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let child = Command::new(driver)
+        .arg(format!("--port={port}"))
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("chromedriver starts");
+    let deadline = Instant::now() + Duration::from_secs(20);
+    while tokio::net::TcpStream::connect(("127.0.0.1", port))
+        .await
+        .is_err()
+    {
+        assert!(Instant::now() < deadline, "chromedriver did not listen");
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
+    (Driver(child), port)
+}
+
+async fn open_browser(port: u16, chrome: &std::path::Path) -> Client {
+    let mut caps = serde_json::Map::new();
+    caps.insert(
+        "goog:chromeOptions".into(),
+        json!({
+            "binary": chrome,
+            "args": ["--headless=new", "--no-sandbox", "--disable-gpu",
+                     "--disable-dev-shm-usage", "--window-size=1400,900"],
+        }),
+    );
+    ClientBuilder::new(hyper_util::client::legacy::connect::HttpConnector::new())
+        .capabilities(caps)
+        .connect(&format!("http://127.0.0.1:{port}"))
+        .await
+        .expect("a browser session")
+}
+
+fn shots() -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/dashboard");
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+async fn screenshot(client: &Client, name: &str) {
+    let png = client.screenshot().await.unwrap();
+    std::fs::write(shots().join(format!("{name}.png")), png).unwrap();
+}
+
+/// Polls `check` (a JS expression) until it is true.
+async fn until(client: &Client, what: &str, check: &str) {
+    let deadline = Instant::now() + Duration::from_secs(20);
+    loop {
+        let v = client
+            .execute(&format!("return !!({check});"), vec![])
+            .await
+            .unwrap();
+        if v == Value::Bool(true) {
+            return;
+        }
+        if Instant::now() > deadline {
+            screenshot(client, "timeout").await;
+            panic!("timed out waiting for {what} ({check})");
+        }
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
+}
+
+/// The viewport position of a world point on the map.
+async fn screen_of(client: &Client, x: f64, y: f64) -> (f64, f64) {
+    let v = client
+        .execute(
+            "const [sx, sy] = window.seacover.view.toScreen(arguments[0], arguments[1]);
+             const r = document.getElementById('map').getBoundingClientRect();
+             return [r.left + sx, r.top + sy];",
+            vec![json!(x), json!(y)],
+        )
+        .await
+        .unwrap();
+    (v[0].as_f64().unwrap(), v[1].as_f64().unwrap())
+}
+
+async fn click_at(client: &Client, x: f64, y: f64) {
+    let mouse = MouseActions::new("mouse".into())
+        .then(PointerAction::MoveTo {
+            duration: None,
+            x: x.round(),
+            y: y.round(),
+        })
+        .then(PointerAction::Down {
+            button: MOUSE_BUTTON_LEFT,
+        })
+        .then(PointerAction::Up {
+            button: MOUSE_BUTTON_LEFT,
+        });
+    client.perform_actions(mouse).await.unwrap();
+}
+
+async fn drag(client: &Client, from: (f64, f64), to: (f64, f64)) {
+    let mut mouse = MouseActions::new("mouse".into())
+        .then(PointerAction::MoveTo {
+            duration: None,
+            x: from.0.round(),
+            y: from.1.round(),
+        })
+        .then(PointerAction::Down {
+            button: MOUSE_BUTTON_LEFT,
+        });
+    for k in 1..=10 {
+        let f = k as f64 / 10.0;
+        mouse = mouse.then(PointerAction::MoveTo {
+            duration: Some(Duration::from_millis(20)),
+            x: (from.0 + f * (to.0 - from.0)).round(),
+            y: (from.1 + f * (to.1 - from.1)).round(),
+        });
+    }
+    mouse = mouse.then(PointerAction::Up {
+        button: MOUSE_BUTTON_LEFT,
+    });
+    client.perform_actions(mouse).await.unwrap();
+}
+
+async fn objects(addr: SocketAddr) -> Vec<RiskObjectDocument> {
+    reqwest::get(format!("http://{addr}/api/v1/risk-objects"))
+        .await
+        .unwrap()
+        .json()
+        .await
+        .unwrap()
+}
+
+async fn wait_objects(
+    addr: SocketAddr,
+    what: &str,
+    check: impl Fn(&[RiskObjectDocument]) -> bool,
+) -> Vec<RiskObjectDocument> {
+    let deadline = Instant::now() + Duration::from_secs(10);
+    loop {
+        let list = objects(addr).await;
+        if check(&list) {
+            return list;
+        }
+        assert!(Instant::now() < deadline, "timed out: {what}: {list:?}");
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
+}
+
+/// Answers the token dialog with `token`.
+async fn give_token(client: &Client, token: &str) {
+    until(client, "the token dialog", "document.getElementById('token-dialog').open").await;
+    let input = client.find(Locator::Id("token-input")).await.unwrap();
+    input.clear().await.unwrap();
+    input.send_keys(token).await.unwrap();
+    client
+        .find(Locator::Css("#token-form button[value=ok]"))
+        .await
+        .unwrap()
+        .click()
+        .await
+        .unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_dashboard_shows_the_fleet_and_edits_risk() {
+    let (driver_path, chrome) = match browser() {
+        Ok(found) => found,
+        Err(why) if std::env::var("CI").as_deref() == Ok("true") => {
+            panic!("{why}: CI must install chromium and chromium-driver")
+        }
+        Err(why) => {
+            eprintln!("SKIPPED the dashboard browser test: {why} (apt-get install chromium chromium-driver)");
+            return;
+        }
+    };
+
+    // The real coordinator with the paper's eight vessels on real links.
+    let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let addr = listener.local_addr().unwrap();
+    let stop = CancellationToken::new();
+    let config = ServeConfig {
+        time_warp: 5.0,
+        token: Some(TOKEN.into()),
+        ..ServeConfig::default()
+    };
+    let server = tokio::spawn(serve(listener, config, stop.clone()));
+    let fleet = tokio::spawn(run_fleet(
+        AgentConfig {
+            url: format!("ws://{addr}/api/v1/vessels/link"),
+            time_warp: 5.0,
+            pose_hz: 20.0,
+            seed: 1,
+            token: Some(TOKEN.into()),
+        },
+        paper_vessels(VesselParams::PAPER),
+        stop.clone(),
+    ));
+
+    let (_driver, port) = start_driver(&driver_path).await;
+    let client = open_browser(port, &chrome).await;
+    client.goto(&format!("http://{addr}/")).await.unwrap();
+
+    // Loads without errors; lists the eight vessels; the map is drawn.
+    until(&client, "the page's modules", "window.seacover").await;
+    until(
+        &client,
+        "eight vessels in the table",
+        "document.querySelectorAll('#vessels tr[data-vessel-id]').length === 8",
+    )
+    .await;
+    let ids = client
+        .execute(
+            "return [...document.querySelectorAll('#vessels tr[data-vessel-id]')].map(r => r.dataset.vesselId);",
+            vec![],
+        )
+        .await
+        .unwrap();
+    let expected: Vec<String> = (1..=8).map(|i| format!("usv-{i}")).collect();
+    assert_eq!(ids, json!(expected));
+    until(
+        &client,
+        "cells on the map",
+        "window.seacover.state.snapshot.vessels.every(v => v.polygon)",
+    )
+    .await;
+    // Distinct colours over a grid of pixels: an empty or blank canvas has one.
+    tokio::time::sleep(Duration::from_millis(300)).await;
+    let colours = client
+        .execute(
+            "const c = document.getElementById('map');
+             const ctx = c.getContext('2d');
+             const seen = new Set();
+             for (let i = 1; i < 20; i++) for (let j = 1; j < 20; j++) {
+               const d = ctx.getImageData(Math.floor(c.width * i / 20), Math.floor(c.height * j / 20), 1, 1).data;
+               seen.add(d[0] + ',' + d[1] + ',' + d[2]);
+             }
+             return seen.size;",
+            vec![],
+        )
+        .await
+        .unwrap();
+    assert!(
+        colours.as_u64().unwrap() > 20,
+        "the map looks blank: {colours} colours"
+    );
+    let errors = client.execute("return window.__errors;", vec![]).await.unwrap();
+    assert_eq!(errors, json!([]), "the page reported errors");
+    screenshot(&client, "dashboard").await;
+
+    // A wrong token is refused with a visible message, and nothing changes.
+    client
+        .execute(
+            "localStorage.setItem('seacover.token', 'wrong');",
+            vec![],
+        )
+        .await
+        .unwrap();
+    let before = objects(addr).await;
+    let (sx, sy) = screen_of(&client, 20.0, 20.0).await;
+    click_at(&client, sx, sy).await;
+    give_token(&client, "still-wrong").await;
+    until(
+        &client,
+        "a visible refusal",
+        "[...document.querySelectorAll('#errors .error')].some(e => e.textContent.includes('401') && e.offsetParent !== null)",
+    )
+    .await;
+    screenshot(&client, "wrong-token").await;
+    assert_eq!(objects(addr).await, before, "a refused click changed the risk");
+
+    // Clicking the map adds a risk object where it was clicked (after the
+    // right token is given once).
+    click_at(&client, sx, sy).await;
+    give_token(&client, TOKEN).await;
+    let list = wait_objects(addr, "the new object", |l| l.len() == before.len() + 1).await;
+    let added = list.last().unwrap().clone();
+    let id = added.id.clone().unwrap();
+    assert!(
+        (added.x - 20.0).abs() < 1.5 && (added.y - 20.0).abs() < 1.5,
+        "added at ({}, {}), clicked at (20, 20)",
+        added.x,
+        added.y
+    );
+    let stored = client
+        .execute("return localStorage.getItem('seacover.token');", vec![])
+        .await
+        .unwrap();
+    assert_eq!(stored, json!(TOKEN), "the token is kept");
+    until(
+        &client,
+        "the new object on the page",
+        &format!("window.seacover.state.snapshot.mission.risk.objects.some(o => o.id === '{id}')"),
+    )
+    .await;
+
+    // Dragging moves it.
+    let from = screen_of(&client, added.x, added.y).await;
+    let to = screen_of(&client, 35.0, 45.0).await;
+    drag(&client, from, to).await;
+    let list = wait_objects(addr, "the moved object", |l| {
+        l.iter().any(|o| {
+            o.id.as_deref() == Some(id.as_str()) && (o.x - 35.0).abs() < 1.5 && (o.y - 45.0).abs() < 1.5
+        })
+    })
+    .await;
+    assert_eq!(list.len(), before.len() + 1);
+    until(
+        &client,
+        "the moved object on the page",
+        &format!("window.seacover.state.snapshot.mission.risk.objects.some(o => o.id === '{id}' && Math.abs(o.x - 35) < 1.5)"),
+    )
+    .await;
+    screenshot(&client, "moved").await;
+
+    // Selecting it and pressing delete removes it.
+    let at = screen_of(&client, 35.0, 45.0).await;
+    click_at(&client, at.0, at.1).await;
+    until(
+        &client,
+        "the object panel",
+        &format!("!document.getElementById('object-form').hidden && document.getElementById('object-id').textContent === '{id}'"),
+    )
+    .await;
+    client
+        .find(Locator::Id("object-delete"))
+        .await
+        .unwrap()
+        .click()
+        .await
+        .unwrap();
+    let list = wait_objects(addr, "the object deleted", |l| {
+        l.iter().all(|o| o.id.as_deref() != Some(id.as_str()))
+    })
+    .await;
+    assert_eq!(list, before);
+    screenshot(&client, "deleted").await;
+
+    let errors = client.execute("return window.__errors;", vec![]).await.unwrap();
+    assert_eq!(errors, json!([]), "the page reported errors");
+    client.close().await.unwrap();
+    stop.cancel();
+    fleet.await.unwrap();
+    server.await.unwrap().unwrap();
+}
