@@ -39,7 +39,11 @@ function connect(delay = 500) {
   };
   ws.onmessage = (event) => {
     try {
+      const started = performance.now();
       onSnapshot(JSON.parse(event.data));
+      // Cost of taking in one snapshot (ms, moving average).
+      const ms = performance.now() - started;
+      state.snapshotMs = state.snapshotMs === undefined ? ms : 0.9 * state.snapshotMs + 0.1 * ms;
     } catch (e) {
       console.warn("seacover: a snapshot could not be shown", e);
     }

@@ -113,6 +113,22 @@ fn edge(a: f64, lambda: f64, h: f64, s0: f64, s1: f64, far: bool) -> (f64, f64) 
                 piece = piece.min((h2 + u * u).sqrt());
             }
             let end = (u + piece).min(u1);
+            if end <= u {
+                // The Gaussian decays within one float step of u (a·u² ≳
+                // 1e16: a needle-thin object millions of metres away), so the
+                // steps cannot advance. What is left is the Laplace tail
+                // ∫_u^∞ e^{λ − a(h² + s²)} ds ≈ e^{λ − a r²} / (2 a u), with
+                // 1/r² constant across it.
+                let r2 = h2 + u * u;
+                let tail = if far {
+                    (lambda - a * r2).exp()
+                } else {
+                    (-a * r2).exp_m1()
+                } / (2.0 * a * u);
+                line += tail;
+                mass_integral += if far { tail / r2 } else { -tail / r2 };
+                break;
+            }
             let len = end - u;
             let (mut mi, mut li) = (0.0, 0.0);
             for (xk, wk) in x.iter().zip(w) {
