@@ -435,7 +435,8 @@ async fn demo(bind: &str, time_warp: f64, token: Option<String>) -> anyhow::Resu
         paper_vessels(VesselParams::PAPER),
         stop.clone(),
     ));
-    println!("seacover demo: coordinator on http://{addr}/ with 8 vessels (usv-1 … usv-8)");
+    println!("seacover demo: coordinator with 8 vessels (usv-1 … usv-8), mission in memory");
+    println!("  dashboard: http://{addr}/");
     println!("  coverage: http://{addr}/api/v1/coverage   vessels: http://{addr}/api/v1/vessels");
     println!("  stop with ctrl-c");
     fleet.await?;

@@ -201,7 +201,12 @@ async fn wait_objects(
 
 /// Answers the token dialog with `token`.
 async fn give_token(client: &Client, token: &str) {
-    until(client, "the token dialog", "document.getElementById('token-dialog').open").await;
+    until(
+        client,
+        "the token dialog",
+        "document.getElementById('token-dialog').open",
+    )
+    .await;
     let input = client.find(Locator::Id("token-input")).await.unwrap();
     input.clear().await.unwrap();
     input.send_keys(token).await.unwrap();
@@ -222,7 +227,9 @@ async fn the_dashboard_shows_the_fleet_and_edits_risk() {
             panic!("{why}: CI must install chromium and chromium-driver")
         }
         Err(why) => {
-            eprintln!("SKIPPED the dashboard browser test: {why} (apt-get install chromium chromium-driver)");
+            eprintln!(
+                "SKIPPED the dashboard browser test: {why} (apt-get install chromium chromium-driver)"
+            );
             return;
         }
     };
@@ -296,16 +303,16 @@ async fn the_dashboard_shows_the_fleet_and_edits_risk() {
         colours.as_u64().unwrap() > 20,
         "the map looks blank: {colours} colours"
     );
-    let errors = client.execute("return window.__errors;", vec![]).await.unwrap();
+    let errors = client
+        .execute("return window.__errors;", vec![])
+        .await
+        .unwrap();
     assert_eq!(errors, json!([]), "the page reported errors");
     screenshot(&client, "dashboard").await;
 
     // A wrong token is refused with a visible message, and nothing changes.
     client
-        .execute(
-            "localStorage.setItem('seacover.token', 'wrong');",
-            vec![],
-        )
+        .execute("localStorage.setItem('seacover.token', 'wrong');", vec![])
         .await
         .unwrap();
     let before = objects(addr).await;
@@ -319,7 +326,11 @@ async fn the_dashboard_shows_the_fleet_and_edits_risk() {
     )
     .await;
     screenshot(&client, "wrong-token").await;
-    assert_eq!(objects(addr).await, before, "a refused click changed the risk");
+    assert_eq!(
+        objects(addr).await,
+        before,
+        "a refused click changed the risk"
+    );
 
     // Clicking the map adds a risk object where it was clicked (after the
     // right token is given once).
@@ -352,7 +363,9 @@ async fn the_dashboard_shows_the_fleet_and_edits_risk() {
     drag(&client, from, to).await;
     let list = wait_objects(addr, "the moved object", |l| {
         l.iter().any(|o| {
-            o.id.as_deref() == Some(id.as_str()) && (o.x - 35.0).abs() < 1.5 && (o.y - 45.0).abs() < 1.5
+            o.id.as_deref() == Some(id.as_str())
+                && (o.x - 35.0).abs() < 1.5
+                && (o.y - 45.0).abs() < 1.5
         })
     })
     .await;
@@ -388,7 +401,42 @@ async fn the_dashboard_shows_the_fleet_and_edits_risk() {
     assert_eq!(list, before);
     screenshot(&client, "deleted").await;
 
-    let errors = client.execute("return window.__errors;", vec![]).await.unwrap();
+    // Clicking a vessel in the table selects it: its charts fill and the
+    // map follows it.
+    client
+        .find(Locator::Css("#vessels tr[data-vessel-id='usv-3']"))
+        .await
+        .unwrap()
+        .click()
+        .await
+        .unwrap();
+    until(
+        &client,
+        "the vessel's charts",
+        "!document.getElementById('vessel-charts').hidden && window.seacover.state.vesselSeries.u.points.length > 20 \
+         && window.seacover.state.vesselSeries.obs.points.length > 20",
+    )
+    .await;
+    let offset = client
+        .execute(
+            "const v = window.seacover.state.snapshot.vessels.find(v => v.id === 'usv-3');
+             const view = window.seacover.view;
+             const [sx, sy] = view.toScreen(v.pose.x, v.pose.y);
+             return Math.hypot(sx - view.width / 2, sy - view.height / 2);",
+            vec![],
+        )
+        .await
+        .unwrap();
+    assert!(
+        offset.as_f64().unwrap() < 30.0,
+        "the map does not follow the selected vessel: {offset} px off centre"
+    );
+    screenshot(&client, "vessel-selected").await;
+
+    let errors = client
+        .execute("return window.__errors;", vec![])
+        .await
+        .unwrap();
     assert_eq!(errors, json!([]), "the page reported errors");
     client.close().await.unwrap();
     stop.cancel();

@@ -95,16 +95,26 @@ function onSnapshot(snap) {
 
 function drawTable(snap) {
   const body = $("vessels").tBodies[0];
-  const rows = snap.vessels.map((v) => {
-    const e = v.last_command ? v.last_command.E.toFixed(2) : "–";
-    const speed = v.pose ? Math.hypot(v.pose.u, v.pose.v).toFixed(2) : "–";
-    const seen = v.last_seen == null ? "never" : `${Math.max(0, snap.time - v.last_seen).toFixed(1)} s ago`;
-    const sel = v.id === state.selectedVessel ? " class=\"selected\"" : "";
+  const ids = snap.vessels.map((v) => v.id).join("\n");
+  // Rows are rebuilt only when the fleet changes; otherwise their cells are
+  // updated in place, so a row under the pointer stays the same element.
+  if (body.dataset.ids !== ids) {
+    body.dataset.ids = ids;
+    body.innerHTML = snap.vessels
+      .map((v) => `<tr data-vessel-id="${escape(v.id)}"><td>${escape(v.id)}</td><td></td><td></td><td></td><td></td></tr>`)
+      .join("");
+  }
+  snap.vessels.forEach((v, i) => {
+    const row = body.rows[i];
+    const cells = row.cells;
     const link = v.connected ? (v.live ? "live" : "silent") : "off";
-    return `<tr data-vessel-id="${escape(v.id)}"${sel}><td>${escape(v.id)}</td>` +
-      `<td class="${v.connected ? "" : "off"}">${link}</td><td>${e}</td><td>${speed}</td><td>${seen}</td></tr>`;
+    cells[1].textContent = link;
+    cells[1].className = v.connected ? "" : "off";
+    cells[2].textContent = v.last_command ? v.last_command.E.toFixed(2) : "–";
+    cells[3].textContent = v.pose ? Math.hypot(v.pose.u, v.pose.v).toFixed(2) : "–";
+    cells[4].textContent = v.last_seen == null ? "never" : `${Math.max(0, snap.time - v.last_seen).toFixed(1)} s ago`;
+    row.classList.toggle("selected", v.id === state.selectedVessel);
   });
-  body.innerHTML = rows.join("");
   $("vessel-count").textContent = `(${snap.vessels.length})`;
 }
 
@@ -345,5 +355,9 @@ $("zoom-fit").addEventListener("click", () => {
 window.addEventListener("unhandledrejection", (event) => {
   showError(`unexpected: ${event.reason}`);
 });
+
+// `?vessel=ID` opens the page following that vessel (links can be shared).
+const wanted = new URLSearchParams(location.search).get("vessel");
+if (wanted) selectVessel(wanted);
 
 connect();
