@@ -443,3 +443,85 @@ async fn the_dashboard_shows_the_fleet_and_edits_risk() {
     fleet.await.unwrap();
     server.await.unwrap().unwrap();
 }
+
+/// A thousand vessels at 10 Hz (the load benchmark's links, in this process):
+/// the page lists all of them, keeps drawing without errors, and reports what
+/// a frame and a snapshot cost (printed; the README quotes the release
+/// figures).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_dashboard_keeps_up_with_a_thousand_vessels() {
+    let (driver_path, chrome) = match browser() {
+        Ok(found) => found,
+        Err(why) if std::env::var("CI").as_deref() == Ok("true") => {
+            panic!("{why}: CI must install chromium and chromium-driver")
+        }
+        Err(why) => {
+            eprintln!("SKIPPED the dashboard browser test: {why} (apt-get install chromium chromium-driver)");
+            return;
+        }
+    };
+    let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let addr = listener.local_addr().unwrap();
+    let stop = CancellationToken::new();
+    let server = tokio::spawn(serve(listener, ServeConfig::default(), stop.clone()));
+    let mut load = seacover::load::LoadConfig::new(
+        format!("http://{addr}"),
+        1000,
+        10.0,
+        Duration::from_secs(20),
+    );
+    load.warmup = Duration::from_secs(1);
+    let fleet = tokio::spawn(seacover::load::run(load, stop.clone()));
+
+    let (_driver, port) = start_driver(&driver_path).await;
+    let client = open_browser(port, &chrome).await;
+    client.goto(&format!("http://{addr}/")).await.unwrap();
+    until(
+        &client,
+        "a thousand vessels with cells",
+        "window.seacover && window.seacover.state.snapshot \
+         && window.seacover.state.snapshot.vessels.filter(v => v.polygon).length === 1000 \
+         && document.querySelectorAll('#vessels tr[data-vessel-id]').length === 1000",
+    )
+    .await;
+    let start = client
+        .execute(
+            "return [window.seacover.view.draws, window.seacover.state.snapshots];",
+            vec![],
+        )
+        .await
+        .unwrap();
+    tokio::time::sleep(Duration::from_secs(3)).await;
+    let end = client
+        .execute(
+            "return [window.seacover.view.draws, window.seacover.state.snapshots,
+                     window.seacover.view.drawMs, window.seacover.state.snapshotMs];",
+            vec![],
+        )
+        .await
+        .unwrap();
+    let draws = end[0].as_f64().unwrap() - start[0].as_f64().unwrap();
+    let snapshots = end[1].as_f64().unwrap() - start[1].as_f64().unwrap();
+    eprintln!(
+        "dashboard at 1000 vessels: {:.1} snapshots/s, {:.1} frames drawn/s, {:.1} ms per frame, {:.1} ms per snapshot",
+        snapshots / 3.0,
+        draws / 3.0,
+        end[2].as_f64().unwrap(),
+        end[3].as_f64().unwrap()
+    );
+    assert!(
+        snapshots >= 3.0,
+        "the page took in {snapshots} snapshots in 3 s"
+    );
+    assert!(draws >= snapshots.min(10.0), "{draws} frames for {snapshots} snapshots");
+    screenshot(&client, "thousand").await;
+    let errors = client
+        .execute("return window.__errors;", vec![])
+        .await
+        .unwrap();
+    assert_eq!(errors, json!([]), "the page reported errors");
+    client.close().await.unwrap();
+    stop.cancel();
+    let _ = fleet.await.unwrap();
+    server.await.unwrap().unwrap();
+}
