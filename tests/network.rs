@@ -621,7 +621,11 @@ async fn deleting_a_vessel_forgets_it_and_tells_its_link() {
     let (mut sink, mut stream) = hello(server.ws(), "gone-1").await;
     let _ = sink.send(pose(30.0, 30.0)).await;
     let deadline = Instant::now() + Duration::from_secs(5);
-    while !vessels(&server).await.iter().any(|v| v.id == "gone-1" && v.live) {
+    while !vessels(&server)
+        .await
+        .iter()
+        .any(|v| v.id == "gone-1" && v.live)
+    {
         assert!(Instant::now() < deadline, "the vessel never became live");
         tokio::time::sleep(Duration::from_millis(20)).await;
     }
@@ -633,10 +637,13 @@ async fn deleting_a_vessel_forgets_it_and_tells_its_link() {
         .unwrap();
     assert_eq!(r.status(), 204);
     assert!(vessels(&server).await.iter().all(|v| v.id != "gone-1"));
-    let r = reqwest::get(server.http("/api/v1/vessels/gone-1")).await.unwrap();
+    let r = reqwest::get(server.http("/api/v1/vessels/gone-1"))
+        .await
+        .unwrap();
     assert_eq!(r.status(), 404);
     let mut told = false;
-    while let Ok(Some(Ok(msg))) = tokio::time::timeout(Duration::from_secs(2), stream.next()).await {
+    while let Ok(Some(Ok(msg))) = tokio::time::timeout(Duration::from_secs(2), stream.next()).await
+    {
         if let Message::Text(t) = msg {
             let v: Value = serde_json::from_str(&t).unwrap();
             if v["type"] == "error" {

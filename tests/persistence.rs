@@ -139,7 +139,11 @@ async fn sigkill_during_writes_loses_nothing_acknowledged() {
     let data = dir.path().join("data");
     let config = dir.path().join("seacover.toml");
     // Room for the test's write rate; the limit itself is tested elsewhere.
-    std::fs::write(&config, "[server]\nwrite_rate = 10000\nwrite_burst = 10000\n").unwrap();
+    std::fs::write(
+        &config,
+        "[server]\nwrite_rate = 10000\nwrite_burst = 10000\n",
+    )
+    .unwrap();
     let http = reqwest::Client::new();
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
 
@@ -373,7 +377,10 @@ fn a_bad_config_file_is_refused_naming_the_key() {
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("guidance.max_speed"), "{err}");
-    assert!(!dir.path().join("data").exists(), "a refused config touched the store");
+    assert!(
+        !dir.path().join("data").exists(),
+        "a refused config touched the store"
+    );
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

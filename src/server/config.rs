@@ -139,8 +139,7 @@ impl Settings {
 
     /// Parses and validates the text of a configuration file.
     pub fn parse(text: &str) -> Result<Settings, ParseError> {
-        let file: ConfigFile =
-            toml::from_str(text).map_err(|e| ParseError::Syntax(Box::new(e)))?;
+        let file: ConfigFile = toml::from_str(text).map_err(|e| ParseError::Syntax(Box::new(e)))?;
         Settings::from_file(file).map_err(ParseError::Invalid)
     }
 

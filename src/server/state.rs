@@ -18,6 +18,7 @@ use tokio::sync::{mpsc, oneshot, watch};
 use tokio_util::sync::CancellationToken;
 
 use super::error::ApiError;
+use super::store::Store;
 use crate::control::guidance::{Guidance, GuidanceGains, GuidanceMode};
 use crate::control::model::State;
 use crate::coverage::{Evaluation, Fleet, Options, RiskField, Vessel, evaluate};
@@ -27,7 +28,6 @@ use crate::protocol::{
     MissionDocument, PoseDocument, RegionDocument, RiskDocument, RiskObjectDocument,
     SnapshotDocument, VesselStatusDocument,
 };
-use super::store::Store;
 use crate::scenario::{Scenario, evaluation_document};
 
 /// The mission: what to cover and how.
