@@ -456,7 +456,9 @@ async fn the_dashboard_keeps_up_with_a_thousand_vessels() {
             panic!("{why}: CI must install chromium and chromium-driver")
         }
         Err(why) => {
-            eprintln!("SKIPPED the dashboard browser test: {why} (apt-get install chromium chromium-driver)");
+            eprintln!(
+                "SKIPPED the dashboard browser test: {why} (apt-get install chromium chromium-driver)"
+            );
             return;
         }
     };
@@ -513,7 +515,10 @@ async fn the_dashboard_keeps_up_with_a_thousand_vessels() {
         snapshots >= 3.0,
         "the page took in {snapshots} snapshots in 3 s"
     );
-    assert!(draws >= snapshots.min(10.0), "{draws} frames for {snapshots} snapshots");
+    assert!(
+        draws >= snapshots.min(10.0),
+        "{draws} frames for {snapshots} snapshots"
+    );
     screenshot(&client, "thousand").await;
     let errors = client
         .execute("return window.__errors;", vec![])
