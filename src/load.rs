@@ -33,6 +33,9 @@
 //!   duration is reported beside it). A tick the coordinator skips shifts
 //!   the later ticks' numbers, so the skipped-tick count is reported too;
 //!   with skipped ticks this figure is inflated by a tick period per skip.
+//!   It is also split per tick into the tick's first delivery (against t0:
+//!   how late the tick started and finished evaluating) and the spread
+//!   from its first delivery to its last (sending N commands).
 //! - **coordinator CPU and memory**, from the server's `/metrics`
 //!   (`process_cpu_seconds_total`, `process_resident_memory_bytes`, Linux
 //!   only): CPU is Δ cpu seconds / Δ wall seconds between the scrapes at the
@@ -44,8 +47,10 @@
 //!   process (the integration test), both figures include the client.
 //!
 //! The client shares the machine with the coordinator in the benchmark, so
-//! its own CPU is reported too; the receive times are taken when a link's
-//! task reads the frame, so a saturated client inflates the latencies.
+//! its own CPU is reported too, and the machine's busy and hypervisor-steal
+//! shares over the window (Linux `/proc/stat`): other load and steal show
+//! up in the latencies. Receive times are taken when a link's task reads
+//! the frame, so a saturated client inflates the latencies as well.
 
 use std::fmt;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -230,9 +235,21 @@ pub struct LoadReport {
     pub pose_to_command_ms: Latency,
     /// Estimated tick start → command received (compared with the target).
     pub tick_to_command_ms: Latency,
+    /// Its two parts, one sample per tick: the tick's first delivery (how
+    /// late the tick started and evaluated, against the fastest one) and
+    /// the spread from its first delivery to its last (sending every link
+    /// its command).
+    pub tick_first_delivery_ms: Latency,
+    pub tick_delivery_spread_ms: Latency,
     pub coordinator: CoordinatorFigures,
     /// CPU of this load client over the window, in cores.
     pub client_cpu_cores: Option<f64>,
+    /// This machine's CPU over the window (Linux `/proc/stat`): the share of
+    /// all cores busy, and the share stolen by the hypervisor. On loopback
+    /// the coordinator runs here too; other load or steal shows in the
+    /// latencies.
+    pub machine_busy_percent: Option<f64>,
+    pub machine_steal_percent: Option<f64>,
     pub targets: Vec<TargetCheck>,
     pub notes: Vec<String>,
 }
@@ -334,6 +351,18 @@ impl fmt::Display for LoadReport {
         )?;
         row(
             f,
+            "… of which the tick's first delivery (per tick)",
+            self.tick_first_delivery_ms.text(),
+            "",
+        )?;
+        row(
+            f,
+            "… and the first → last delivery of a tick (per tick)",
+            self.tick_delivery_spread_ms.text(),
+            "",
+        )?;
+        row(
+            f,
             "pose sent → next command, p50 / p99 / max",
             self.pose_to_command_ms.text(),
             "",
@@ -380,6 +409,15 @@ impl fmt::Display for LoadReport {
             opt(self.client_cpu_cores, |v| format!("{v:.2} cores")),
             "",
         )?;
+        row(
+            f,
+            "this machine's CPU",
+            match (self.machine_busy_percent, self.machine_steal_percent) {
+                (Some(b), Some(s)) => format!("{b:.0} % busy, {s:.1} % stolen by the hypervisor"),
+                _ => "n/a".into(),
+            },
+            "",
+        )?;
         writeln!(f)?;
         writeln!(
             f,
@@ -407,6 +445,48 @@ struct Scrape {
     tick_sum: Option<f64>,
     tick_count: Option<f64>,
     client_cpu: Option<f64>,
+    machine: Option<MachineCpu>,
+}
+
+/// Cumulative CPU time of the whole machine, in USER_HZ ticks.
+#[derive(Debug, Clone, Copy)]
+struct MachineCpu {
+    total: u64,
+    idle: u64,
+    steal: u64,
+}
+
+/// The `cpu` line of `/proc/stat`: user nice system idle iowait irq
+/// softirq steal (guest time is already in user).
+fn machine_cpu(stat: &str) -> Option<MachineCpu> {
+    let line = stat.lines().find(|l| l.starts_with("cpu "))?;
+    let v: Vec<u64> = line
+        .split_whitespace()
+        .skip(1)
+        .take(8)
+        .map(|f| f.parse().ok())
+        .collect::<Option<_>>()?;
+    (v.len() == 8).then(|| MachineCpu {
+        total: v.iter().sum(),
+        idle: v[3] + v[4],
+        steal: v[7],
+    })
+}
+
+/// (busy %, steal %) between two readings.
+fn machine_shares(a: Option<MachineCpu>, b: Option<MachineCpu>) -> (Option<f64>, Option<f64>) {
+    match (a, b) {
+        (Some(a), Some(b)) if b.total > a.total => {
+            let total = (b.total - a.total) as f64;
+            let idle = b.idle.saturating_sub(a.idle) as f64;
+            let steal = b.steal.saturating_sub(a.steal) as f64;
+            (
+                Some(100.0 * (total - idle) / total),
+                Some(100.0 * steal / total),
+            )
+        }
+        _ => (None, None),
+    }
 }
 
 /// The value of the series `series` (name and labels exactly as rendered).
@@ -441,6 +521,9 @@ fn parse_scrape(text: &str, at: Instant) -> Scrape {
             &format!("{}_count", crate::server::metrics::TICK_SECONDS),
         ),
         client_cpu: crate::server::metrics::own_cpu_seconds(),
+        machine: std::fs::read_to_string("/proc/stat")
+            .ok()
+            .and_then(|s| machine_cpu(&s)),
     }
 }
 
@@ -489,8 +572,8 @@ struct LinkOutcome {
     commands: u64,
     /// Pose sent → next command, seconds.
     pose_latency: Vec<f64>,
-    /// Receive time since `origin` − tick / tick rate, seconds.
-    tick_offsets: Vec<f64>,
+    /// (tick, receive time since `origin` − tick / tick rate in seconds).
+    tick_offsets: Vec<(u64, f64)>,
 }
 
 /// The wall-clock deadline or cancellation, whichever comes first; `true`
@@ -714,8 +797,17 @@ pub async fn run(config: LoadConfig, shutdown: CancellationToken) -> Result<Load
         pose_latency.append(&mut o.pose_latency);
         offsets.append(&mut o.tick_offsets);
     }
-    let t0 = offsets.iter().copied().fold(f64::INFINITY, f64::min);
-    let tick_delay: Vec<f64> = offsets.iter().map(|o| o - t0).collect();
+    let t0 = offsets.iter().map(|o| o.1).fold(f64::INFINITY, f64::min);
+    let tick_delay: Vec<f64> = offsets.iter().map(|o| o.1 - t0).collect();
+    // Per tick: its first delivery (the tick's start and evaluation) and
+    // the spread to its last (sending every link its command).
+    let mut ticks: std::collections::HashMap<u64, (f64, f64)> = std::collections::HashMap::new();
+    for &(tick, o) in &offsets {
+        let e = ticks.entry(tick).or_insert((o, o));
+        (e.0, e.1) = (e.0.min(o), e.1.max(o));
+    }
+    let first_delivery = Latency::of(ticks.values().map(|(first, _)| first - t0).collect());
+    let delivery_spread = Latency::of(ticks.values().map(|(first, last)| last - first).collect());
 
     let wall = end.at - start.at;
     let per_core =
@@ -754,6 +846,7 @@ pub async fn run(config: LoadConfig, shutdown: CancellationToken) -> Result<Load
         notes.push("interrupted: the window is shorter than asked".into());
     }
 
+    let (busy, steal) = machine_shares(start.machine, end.machine);
     let tick_to_command_ms = Latency::of(tick_delay);
     let pose_to_command_ms = Latency::of(pose_latency);
     let links = LinkCounts {
@@ -814,8 +907,12 @@ pub async fn run(config: LoadConfig, shutdown: CancellationToken) -> Result<Load
         },
         pose_to_command_ms,
         tick_to_command_ms,
+        tick_first_delivery_ms: first_delivery,
+        tick_delivery_spread_ms: delivery_spread,
         coordinator,
         client_cpu_cores: per_core(start.client_cpu, end.client_cpu),
+        machine_busy_percent: busy,
+        machine_steal_percent: steal,
         targets,
         notes,
     })
@@ -966,9 +1063,10 @@ async fn run_link(
                             out.pose_latency.extend(pending.drain(..).map(|s| (at - s).as_secs_f64()));
                             if shared.in_window(at) {
                                 out.commands += 1;
-                                out.tick_offsets.push(
+                                out.tick_offsets.push((
+                                    c.tick,
                                     (at - shared.origin).as_secs_f64() - c.tick as f64 / shared.tick_rate,
-                                );
+                                ));
                             }
                             (u, r) = (c.u_d, c.r_d);
                             if !commanded {
@@ -1057,6 +1155,17 @@ mod tests {
         );
         assert_eq!(series(text, "b_sum"), Some(0.25));
         assert_eq!(series(text, "b"), None);
+    }
+
+    #[test]
+    fn machine_cpu_shares() {
+        let a = machine_cpu("cpu  100 0 50 800 50 0 0 0 0 0\ncpu0 1 2 3\n").unwrap();
+        let b = machine_cpu("cpu  200 0 100 1000 50 0 0 50 0 0\n").unwrap();
+        let (busy, steal) = machine_shares(Some(a), Some(b));
+        // 400 ticks: 200 idle, 50 stolen.
+        assert_eq!(busy, Some(50.0));
+        assert_eq!(steal, Some(12.5));
+        assert!(machine_cpu("intr 1 2").is_none());
     }
 
     #[test]

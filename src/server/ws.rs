@@ -144,13 +144,17 @@ async fn run_link(socket: WebSocket, app: AppState) {
     }
 
     let mut garbage = 0;
+    // Registered once: a fresh `cancelled()` per frame would lock the
+    // token's shared waiter list twice per pose, from every link at once.
+    let shutdown = app.shutdown.cancelled();
+    tokio::pin!(shutdown);
     loop {
         tokio::select! {
             // In this order: a command waiting behind a pose that is being
             // read and forwarded only arrives later. Commands come once a
             // tick, so they cannot starve the poses.
             biased;
-            _ = app.shutdown.cancelled() => {
+            _ = &mut shutdown => {
                 let _ = sink.send(text(&error("shutting_down", "the coordinator is shutting down"))).await;
                 break;
             }
