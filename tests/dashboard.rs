@@ -433,6 +433,19 @@ async fn the_dashboard_shows_the_fleet_and_edits_risk() {
     );
     screenshot(&client, "vessel-selected").await;
 
+    // A phone-sized window: the map stays usable above the panels.
+    client.set_window_size(390, 844).await.unwrap();
+    until(
+        &client,
+        "the phone layout",
+        "(() => { const r = document.getElementById('map').getBoundingClientRect();
+                  const s = document.getElementById('side').getBoundingClientRect();
+                  return r.width > 300 && r.width <= 390 && r.height > 250 && s.top >= r.bottom - 1; })()",
+    )
+    .await;
+    tokio::time::sleep(Duration::from_millis(300)).await;
+    screenshot(&client, "phone").await;
+
     let errors = client
         .execute("return window.__errors;", vec![])
         .await
