@@ -41,6 +41,23 @@ fn browser() -> Result<(PathBuf, PathBuf), String> {
     Ok((driver, chrome))
 }
 
+/// The browser, or `None` after saying why the test is skipped; under
+/// `CI=true` a missing browser fails the test instead.
+fn browser_or_skip() -> Option<(PathBuf, PathBuf)> {
+    match browser() {
+        Ok(found) => Some(found),
+        Err(why) if std::env::var("CI").as_deref() == Ok("true") => {
+            panic!("{why}: CI must install chromium and chromium-driver")
+        }
+        Err(why) => {
+            eprintln!(
+                "SKIPPED the dashboard browser test: {why} (apt-get install chromium chromium-driver)"
+            );
+            None
+        }
+    }
+}
+
 struct Driver(Child);
 
 impl Drop for Driver {
@@ -221,17 +238,8 @@ async fn give_token(client: &Client, token: &str) {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_dashboard_shows_the_fleet_and_edits_risk() {
-    let (driver_path, chrome) = match browser() {
-        Ok(found) => found,
-        Err(why) if std::env::var("CI").as_deref() == Ok("true") => {
-            panic!("{why}: CI must install chromium and chromium-driver")
-        }
-        Err(why) => {
-            eprintln!(
-                "SKIPPED the dashboard browser test: {why} (apt-get install chromium chromium-driver)"
-            );
-            return;
-        }
+    let Some((driver_path, chrome)) = browser_or_skip() else {
+        return;
     };
 
     // The real coordinator with the paper's eight vessels on real links.
@@ -463,17 +471,8 @@ async fn the_dashboard_shows_the_fleet_and_edits_risk() {
 /// figures).
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_dashboard_keeps_up_with_a_thousand_vessels() {
-    let (driver_path, chrome) = match browser() {
-        Ok(found) => found,
-        Err(why) if std::env::var("CI").as_deref() == Ok("true") => {
-            panic!("{why}: CI must install chromium and chromium-driver")
-        }
-        Err(why) => {
-            eprintln!(
-                "SKIPPED the dashboard browser test: {why} (apt-get install chromium chromium-driver)"
-            );
-            return;
-        }
+    let Some((driver_path, chrome)) = browser_or_skip() else {
+        return;
     };
     let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
     let addr = listener.local_addr().unwrap();
