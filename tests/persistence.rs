@@ -22,17 +22,21 @@ use serde_json::json;
 use tokio::net::TcpListener;
 use tokio_util::sync::CancellationToken;
 
-/// Starts the real binary on port 0 and returns it with its address.
-fn spawn_server(data: &Path, config: &Path) -> (Child, String) {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_seacover"))
+/// `seacover serve` on port 0 with this data directory and configuration.
+fn serve_command(data: &Path, config: &Path) -> Command {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_seacover"));
+    command
         .args(["serve", "--bind", "127.0.0.1:0", "--data-dir"])
         .arg(data)
         .arg("--config")
         .arg(config)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
+        .stdout(Stdio::piped());
+    command
+}
+
+/// Starts `command` and returns it with the address it printed.
+fn start(mut command: Command) -> (Child, String) {
+    let mut child = command.spawn().unwrap();
     let mut line = String::new();
     BufReader::new(child.stdout.take().unwrap())
         .read_line(&mut line)
@@ -40,6 +44,13 @@ fn spawn_server(data: &Path, config: &Path) -> (Child, String) {
     assert!(line.starts_with("seacover: serving on"), "{line:?}");
     let addr = line.trim().rsplit("http://").next().unwrap().to_string();
     (child, addr)
+}
+
+/// Starts the real binary on port 0 and returns it with its address.
+fn spawn_server(data: &Path, config: &Path) -> (Child, String) {
+    let mut command = serve_command(data, config);
+    command.stderr(Stdio::null());
+    start(command)
 }
 
 /// The risk part of the mission as the model sees it: base and objects by id
@@ -393,21 +404,11 @@ async fn a_config_file_seeds_the_store_and_logs_can_be_json() {
         "tick_hz = 5.0\n[region]\npolygon = [[0, 0], [50, 0], [50, 50], [0, 50]]\n",
     )
     .unwrap();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_seacover"))
-        .args(["--log-format", "json", "serve", "--bind", "127.0.0.1:0"])
-        .arg("--data-dir")
-        .arg(&data)
-        .arg("--config")
-        .arg(&config)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut line = String::new();
-    BufReader::new(child.stdout.take().unwrap())
-        .read_line(&mut line)
-        .unwrap();
-    let addr = line.trim().rsplit("http://").next().unwrap().to_string();
+    let mut command = serve_command(&data, &config);
+    command
+        .args(["--log-format", "json"])
+        .stderr(Stdio::piped());
+    let (mut child, addr) = start(command);
     let m = mission(&reqwest::Client::new(), &addr).await;
     assert_eq!(m.tick_hz, 5.0);
     assert_eq!(m.region.polygon[2], [50.0, 50.0]);
