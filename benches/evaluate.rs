@@ -38,5 +38,26 @@ fn evaluate(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, evaluate);
+/// The partition alone (power cells clipped to the region), the part of an
+/// evaluation that is not per-cell integration.
+fn partition(c: &mut Criterion) {
+    let mut group = c.benchmark_group("partition");
+    for name in ["fleet-1000"] {
+        let scenario = load(name);
+        group
+            .sample_size(30)
+            .measurement_time(Duration::from_secs(4));
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                black_box(seacover::coverage::partition::power_cells(
+                    black_box(&scenario.region),
+                    black_box(&scenario.fleet),
+                ))
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, evaluate, partition);
 criterion_main!(benches);

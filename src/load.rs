@@ -22,20 +22,25 @@
 //!   clock (10 Hz) and sends each live vessel one command per tick, so this
 //!   figure contains the wait for the next tick, uniform in [0, 1/tick rate)
 //!   — about 50 ms on average and up to 100 ms at 10 Hz — by design.
-//! - **tick → command delivered**: how long after its tick started a
+//! - **tick due → command received**: how long after its tick was due a
 //!   command arrives, which is what the coordinator can make fast and what
-//!   the 20 ms target is compared with. The client cannot see the server's
-//!   tick clock, so it estimates it: tick N starts at t0 + N/rate, where t0
-//!   is the minimum of (receive time − N/rate) over every command received.
-//!   The estimate is therefore measured from the fastest delivery seen; it
-//!   under-states the true delay by that delivery's own latency (at least
-//!   one loopback hop after one evaluation of the partition; the mean tick
-//!   duration is reported beside it). A tick the coordinator skips shifts
-//!   the later ticks' numbers, so the skipped-tick count is reported too;
-//!   with skipped ticks this figure is inflated by a tick period per skip.
-//!   It is also split per tick into the tick's first delivery (against t0:
-//!   how late the tick started and finished evaluating) and the spread
-//!   from its first delivery to its last (sending N commands).
+//!   the 20 ms target is compared with. The coordinator publishes in
+//!   `/metrics` when tick 0 was due on the wall clock and its tick period
+//!   (`seacover_tick_origin_seconds`, `seacover_tick_period_seconds`; tick N
+//!   is due at origin + N × period, skipped ticks keep their numbers), so on
+//!   the same host every command's delay is exact: receive time − due time,
+//!   both on one clock, including the wait for the tick task to wake, the
+//!   evaluation, the guidance, the socket writes, loopback, and this
+//!   client's own reading. Against a coordinator on another host (another
+//!   clock) or one that does not publish them, the origin is estimated from
+//!   the fastest delivery seen instead, which under-states every delay by
+//!   that delivery's own; the report says which (`tick_clock`). It is also
+//!   split per tick into the tick's first delivery (the wake-up and the
+//!   evaluation) and the spread from its first delivery to its last
+//!   (sending N commands).
+//! - **tick due → command written**, from the coordinator's own histogram
+//!   `seacover_command_delay_seconds` (1 ms buckets): the same delay without
+//!   loopback and the client, i.e. what the coordinator alone takes.
 //! - **coordinator CPU and memory**, from the server's `/metrics`
 //!   (`process_cpu_seconds_total`, `process_resident_memory_bytes`, Linux
 //!   only): CPU is Δ cpu seconds / Δ wall seconds between the scrapes at the
@@ -200,6 +205,10 @@ pub struct CoordinatorFigures {
     pub commands_dropped_link_full: Option<f64>,
     /// Mean duration of the coordinator's ticks during the window.
     pub tick_mean_ms: Option<f64>,
+    /// Tick due → command written to the link's socket, as the coordinator
+    /// measures it (`seacover_command_delay_seconds`, 1 ms buckets, each
+    /// sample read as its bucket's upper bound).
+    pub command_delay_ms: Latency,
 }
 
 /// One SPEC §4 target and whether this run met it (`null`: not measured).
@@ -233,8 +242,12 @@ pub struct LoadReport {
     pub pose_rate_per_link_hz: f64,
     /// Pose sent → that link's next command received (the issue's figure).
     pub pose_to_command_ms: Latency,
-    /// Estimated tick start → command received (compared with the target).
+    /// Tick due → command received (compared with the target).
     pub tick_to_command_ms: Latency,
+    /// How the ticks' due times were known: `published` (the coordinator's
+    /// tick origin, exact on one host) or `estimated` (from the fastest
+    /// delivery, a lower bound).
+    pub tick_clock: String,
     /// Its two parts, one sample per tick: the tick's first delivery (how
     /// late the tick started and evaluated, against the fastest one) and
     /// the spread from its first delivery to its last (sending every link
@@ -345,7 +358,10 @@ impl fmt::Display for LoadReport {
         )?;
         row(
             f,
-            "tick → command delivered, p50 / p99 / max",
+            &format!(
+                "tick due → command received ({} tick clock), p50 / p99 / max",
+                self.tick_clock
+            ),
             self.tick_to_command_ms.text(),
             "latency",
         )?;
@@ -368,6 +384,12 @@ impl fmt::Display for LoadReport {
             "",
         )?;
         let c = &self.coordinator;
+        row(
+            f,
+            "tick due → command written, coordinator's histogram, p50 / p99 / max",
+            c.command_delay_ms.text(),
+            "",
+        )?;
         row(
             f,
             "coordinator CPU",
@@ -435,7 +457,7 @@ impl fmt::Display for LoadReport {
 }
 
 /// One scrape of `/metrics`.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 struct Scrape {
     at: Instant,
     cpu: Option<f64>,
@@ -444,6 +466,12 @@ struct Scrape {
     link_full: Option<f64>,
     tick_sum: Option<f64>,
     tick_count: Option<f64>,
+    /// When tick 0 was due (Unix seconds) and the tick period, as the
+    /// coordinator publishes them.
+    tick_origin: Option<f64>,
+    tick_period: Option<f64>,
+    /// `seacover_command_delay_seconds`: (upper bound [s], cumulative count).
+    command_delay: Vec<(f64, f64)>,
     client_cpu: Option<f64>,
     machine: Option<MachineCpu>,
 }
@@ -497,6 +525,61 @@ fn series(text: &str, series: &str) -> Option<f64> {
     })
 }
 
+/// The cumulative buckets of the histogram `name`, in rendered order
+/// (ascending), `+Inf` included.
+fn buckets(text: &str, name: &str) -> Vec<(f64, f64)> {
+    let prefix = format!("{name}_bucket{{le=\"");
+    text.lines()
+        .filter_map(|l| {
+            let rest = l.strip_prefix(&prefix)?;
+            let (le, rest) = rest.split_once('"')?;
+            let count = rest.rsplit_once(' ')?.1.trim().parse().ok()?;
+            let le = if le == "+Inf" {
+                f64::INFINITY
+            } else {
+                le.parse().ok()?
+            };
+            Some((le, count))
+        })
+        .collect()
+}
+
+/// Percentiles (ms) of the samples a histogram gained between two scrapes,
+/// each read as the upper bound of its bucket (so never under-stated, and
+/// at most one bucket width, 1 ms below 40 ms, over). No maximum: a
+/// histogram does not keep one, `max` is the upper bound of the highest
+/// non-empty bucket.
+fn bucket_latency(start: &[(f64, f64)], end: &[(f64, f64)]) -> Latency {
+    let gained: Vec<(f64, f64)> = end
+        .iter()
+        .map(|&(le, c)| {
+            let before = start
+                .iter()
+                .find(|(l, _)| *l == le)
+                .map_or(0.0, |(_, c)| *c);
+            (le, c - before)
+        })
+        .collect();
+    let total = gained.last().map_or(0.0, |(_, c)| *c);
+    let rank = |p: f64| {
+        (total > 0.0)
+            .then(|| {
+                let want = (p * total).ceil().max(1.0);
+                gained
+                    .iter()
+                    .find(|(_, c)| *c >= want)
+                    .map(|(le, _)| le * 1e3)
+            })
+            .flatten()
+    };
+    Latency {
+        samples: total as usize,
+        p50: rank(0.5),
+        p99: rank(0.99),
+        max: rank(1.0),
+    }
+}
+
 fn parse_scrape(text: &str, at: Instant) -> Scrape {
     Scrape {
         at,
@@ -520,11 +603,20 @@ fn parse_scrape(text: &str, at: Instant) -> Scrape {
             text,
             &format!("{}_count", crate::server::metrics::TICK_SECONDS),
         ),
+        tick_origin: series(text, crate::server::metrics::TICK_ORIGIN),
+        tick_period: series(text, crate::server::metrics::TICK_PERIOD),
+        command_delay: buckets(text, crate::server::metrics::COMMAND_DELAY),
         client_cpu: crate::server::metrics::own_cpu_seconds(),
         machine: std::fs::read_to_string("/proc/stat")
             .ok()
             .and_then(|s| machine_cpu(&s)),
     }
+}
+
+fn unix_now() -> f64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0.0, |d| d.as_secs_f64())
 }
 
 fn delta(a: Option<f64>, b: Option<f64>) -> Option<f64> {
@@ -542,6 +634,9 @@ struct Shared {
     /// Tick rate of the coordinator in wall time.
     tick_rate: f64,
     origin: Instant,
+    /// `origin` on the wall clock (Unix seconds), to compare receive times
+    /// with the coordinator's published tick origin.
+    origin_unix: f64,
     window_start: OnceLock<Instant>,
     window_end: OnceLock<Instant>,
     /// Links that have finished their handshake, welcomed or not.
@@ -572,7 +667,7 @@ struct LinkOutcome {
     commands: u64,
     /// Pose sent → next command, seconds.
     pose_latency: Vec<f64>,
-    /// (tick, receive time since `origin` − tick / tick rate in seconds).
+    /// (tick, receive time since `origin` in seconds).
     tick_offsets: Vec<(u64, f64)>,
 }
 
@@ -694,6 +789,7 @@ pub async fn run(config: LoadConfig, shutdown: CancellationToken) -> Result<Load
         time_warp: config.time_warp,
         tick_rate: mission.tick_hz * config.time_warp,
         origin: Instant::now(),
+        origin_unix: unix_now(),
         window_start: OnceLock::new(),
         window_end: OnceLock::new(),
         settled: AtomicUsize::new(0),
@@ -746,7 +842,7 @@ pub async fn run(config: LoadConfig, shutdown: CancellationToken) -> Result<Load
     let warmup = warmup_started.elapsed();
 
     let start = if cancelled {
-        before_links
+        before_links.clone()
     } else {
         scrape().await?
     };
@@ -756,7 +852,7 @@ pub async fn run(config: LoadConfig, shutdown: CancellationToken) -> Result<Load
     let window_end = Instant::now();
     let _ = shared.window_end.set(window_end);
     let end = if cancelled {
-        before_links
+        before_links.clone()
     } else {
         scrape().await?
     };
@@ -797,16 +893,60 @@ pub async fn run(config: LoadConfig, shutdown: CancellationToken) -> Result<Load
         pose_latency.append(&mut o.pose_latency);
         offsets.append(&mut o.tick_offsets);
     }
-    let t0 = offsets.iter().map(|o| o.1).fold(f64::INFINITY, f64::min);
-    let tick_delay: Vec<f64> = offsets.iter().map(|o| o.1 - t0).collect();
+    // When each tick was due, on this client's clock. The coordinator
+    // publishes its tick origin and period; on the same host (one wall
+    // clock) that gives every command's exact delay. A delay below zero
+    // means the clocks differ (another host): then estimate the origin from
+    // the fastest delivery, which under-states every delay by that one.
+    let published = match (start.tick_origin, start.tick_period) {
+        (Some(origin), Some(period)) if period > 0.0 => Some((origin - shared.origin_unix, period)),
+        _ => None,
+    }
+    .filter(|&(origin, period)| {
+        offsets
+            .iter()
+            .all(|&(tick, at)| at - (origin + tick as f64 * period) > -1e-3)
+    });
+    let (tick_clock, delays): (&str, Vec<(u64, f64)>) = match published {
+        Some((origin, period)) => (
+            "published",
+            offsets
+                .iter()
+                .map(|&(tick, at)| (tick, at - (origin + tick as f64 * period)))
+                .collect(),
+        ),
+        None => {
+            let due = |tick: u64| tick as f64 / shared.tick_rate;
+            let t0 = offsets
+                .iter()
+                .map(|&(tick, at)| at - due(tick))
+                .fold(f64::INFINITY, f64::min);
+            (
+                "estimated",
+                offsets
+                    .iter()
+                    .map(|&(tick, at)| (tick, at - due(tick) - t0))
+                    .collect(),
+            )
+        }
+    };
+    if tick_clock == "estimated" && !offsets.is_empty() {
+        notes.push(
+            "the coordinator's tick clock could not be used (not published, or on another \
+             host's clock): tick → command is measured from the fastest delivery seen and \
+             under-states every delay by that delivery's own"
+                .into(),
+        );
+    }
+    let tick_delay: Vec<f64> = delays.iter().map(|d| d.1).collect();
     // Per tick: its first delivery (the tick's start and evaluation) and
     // the spread to its last (sending every link its command).
     let mut ticks: std::collections::HashMap<u64, (f64, f64)> = std::collections::HashMap::new();
-    for &(tick, o) in &offsets {
-        let e = ticks.entry(tick).or_insert((o, o));
-        (e.0, e.1) = (e.0.min(o), e.1.max(o));
+    for &(tick, d) in &delays {
+        let e = ticks.entry(tick).or_insert((d, d));
+        (e.0, e.1) = (e.0.min(d), e.1.max(d));
     }
-    let first_delivery = Latency::of(ticks.values().map(|(first, _)| first - t0).collect());
+    let first_delivery = Latency::of(ticks.values().map(|(first, _)| *first).collect());
     let delivery_spread = Latency::of(ticks.values().map(|(first, last)| last - first).collect());
 
     let wall = end.at - start.at;
@@ -827,6 +967,7 @@ pub async fn run(config: LoadConfig, shutdown: CancellationToken) -> Result<Load
         ticks_skipped: delta(start.ticks_skipped, end.ticks_skipped),
         commands_dropped_link_full: delta(start.link_full, end.link_full),
         tick_mean_ms,
+        command_delay_ms: bucket_latency(&start.command_delay, &end.command_delay),
     };
     if coordinator.cpu_cores.is_none() || coordinator.rss_with_links_bytes.is_none() {
         notes.push(
@@ -907,6 +1048,7 @@ pub async fn run(config: LoadConfig, shutdown: CancellationToken) -> Result<Load
         },
         pose_to_command_ms,
         tick_to_command_ms,
+        tick_clock: tick_clock.into(),
         tick_first_delivery_ms: first_delivery,
         tick_delivery_spread_ms: delivery_spread,
         coordinator,
@@ -1065,7 +1207,7 @@ async fn run_link(
                                 out.commands += 1;
                                 out.tick_offsets.push((
                                     c.tick,
-                                    (at - shared.origin).as_secs_f64() - c.tick as f64 / shared.tick_rate,
+                                    (at - shared.origin).as_secs_f64(),
                                 ));
                             }
                             (u, r) = (c.u_d, c.r_d);

@@ -571,7 +571,10 @@ fn evaluate(file: Option<PathBuf>, tolerance: Option<f64>) -> ExitCode {
     if let Err(e) = read {
         return fail("io", format!("cannot read input: {e}"));
     }
-    let options = Options { tolerance };
+    let options = Options {
+        tolerance,
+        ..Options::default()
+    };
     match seacover::scenario::evaluate_text(&text, &options) {
         Ok(doc) => {
             println!(

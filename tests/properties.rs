@@ -220,7 +220,7 @@ proptest! {
     #[test]
     fn fast_and_reference_integrators_agree(c in case()) {
         let (_, _, _, fast) = c.run(&Options::default());
-        let (_, _, _, slow) = c.run(&Options { tolerance: Tolerance::adaptive(1e-10) });
+        let (_, _, _, slow) = c.run(&Options { tolerance: Tolerance::adaptive(1e-10), ..Options::default() });
         prop_assert!((fast.h - slow.h).abs() <= 1e-8 * slow.h);
         for (a, b) in fast.cells.iter().zip(&slow.cells) {
             // Relative for ordinary cells; for slivers, rounding of the geometry at

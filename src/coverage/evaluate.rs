@@ -14,13 +14,18 @@
 use super::density::RiskField;
 use super::fleet::Fleet;
 use super::integrate::{Gaussian, Tolerance, integrate};
-use super::partition::{CellGeometry, power_cells};
+use super::partition::{CellGeometry, power_cells_with};
 use crate::geometry::{Point, Region, bounds};
 
 /// Evaluation settings.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Options {
     pub tolerance: Tolerance,
+    /// Spread the cells over every core (rayon's pool) when the fleet has
+    /// at least [`PARALLEL_MIN`](super::PARALLEL_MIN) vessels. The result
+    /// is identical: cells are independent and H is summed in fleet order.
+    /// Off by default, so the benchmarks and the simulator measure one core.
+    pub parallel: bool,
 }
 
 /// Figures of one vessel's cell.
@@ -48,23 +53,25 @@ pub struct Evaluation {
 
 /// Evaluates the coverage of `fleet` over `region` under `risk`.
 pub fn evaluate(region: &Region, risk: &RiskField, fleet: &Fleet, options: &Options) -> Evaluation {
-    let geometries = power_cells(region, fleet);
-    let mut near = Vec::new();
-    let cells: Vec<CellResult> = geometries
-        .into_iter()
-        .zip(fleet.vessels())
-        .map(|(geometry, vessel)| {
-            cell_figures(
-                region,
-                risk,
-                vessel,
-                fleet.beta(),
-                geometry,
-                options,
-                &mut near,
-            )
-        })
-        .collect();
+    let geometries = power_cells_with(region, fleet, options.parallel);
+    let figures = |(geometry, vessel): (CellGeometry, &super::Vessel), near: &mut Vec<usize>| {
+        cell_figures(region, risk, vessel, fleet.beta(), geometry, options, near)
+    };
+    let cells: Vec<CellResult> = if options.parallel && fleet.len() >= super::PARALLEL_MIN {
+        use rayon::prelude::*;
+        geometries
+            .into_par_iter()
+            .zip(fleet.vessels().par_iter())
+            .map_init(Vec::new, |near, cell| figures(cell, near))
+            .collect()
+    } else {
+        let mut near = Vec::new();
+        geometries
+            .into_iter()
+            .zip(fleet.vessels())
+            .map(|cell| figures(cell, &mut near))
+            .collect()
+    };
     let h = cells.iter().map(|c| c.mass).sum();
     Evaluation { h, cells }
 }

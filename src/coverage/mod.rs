@@ -27,6 +27,11 @@ pub use evaluate::{CellResult, Evaluation, Options, evaluate};
 pub use fleet::{Fleet, Vessel};
 pub use partition::CellGeometry;
 
+/// The fewest vessels for which [`Options::parallel`] spreads the work over
+/// threads: below it a cell takes microseconds and handing cells to the
+/// pool costs more than it saves.
+pub const PARALLEL_MIN: usize = 64;
+
 /// Why inputs to the engine were rejected. Messages name the offending field
 /// with the path a scenario document uses (`vessels[3].k`).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -114,6 +114,13 @@ impl CellGeometry {
 
 /// Computes every vessel's cell, in the fleet's order.
 pub fn power_cells(region: &Region, fleet: &Fleet) -> Vec<CellGeometry> {
+    power_cells_with(region, fleet, false)
+}
+
+/// [`power_cells`], on every core when `parallel` and the fleet is large
+/// enough to pay for it. Each cell depends only on the fleet, never on
+/// another cell, so the result is the same either way, bit for bit.
+pub fn power_cells_with(region: &Region, fleet: &Fleet, parallel: bool) -> Vec<CellGeometry> {
     let vessels = fleet.vessels();
     let tree = RTree::bulk_load(
         vessels
@@ -143,67 +150,73 @@ pub fn power_cells(region: &Region, fleet: &Fleet) -> Vec<CellGeometry> {
     // operation per neighbour, is only needed when that is not enough.
     let spacing = ((hi.x - lo.x) * (hi.y - lo.y) / vessels.len() as f64).sqrt();
     let first_radius = 2.5 * spacing;
-    let mut near: Vec<(f64, usize)> = Vec::new();
-
-    (0..vessels.len())
-        .map(|i| {
-            let p = vessels[i].position;
-            let mut cell = ConvexPolygon::rectangle(lo - p, hi - p);
-            let w_i = (ln_k_max - ln_k[i]) / (2.0 * beta);
-            // Clips by vessel j; false once the cell is empty.
-            let cut = |cell: &mut ConvexPolygon, j: usize| -> bool {
-                let d = vessels[j].position - p;
-                let d2 = norm2(d);
-                if d2 == 0.0 {
-                    if ln_k[j] > ln_k[i] || (ln_k[j] == ln_k[i] && j < i) {
-                        cell.vertices.clear();
-                    }
-                } else {
-                    cell.clip(d, 0.5 * d2 - (ln_k[j] - ln_k[i]) / (2.0 * beta));
+    let cell_of = |i: usize, near: &mut Vec<(f64, usize)>| -> CellGeometry {
+        let p = vessels[i].position;
+        let mut cell = ConvexPolygon::rectangle(lo - p, hi - p);
+        let w_i = (ln_k_max - ln_k[i]) / (2.0 * beta);
+        // Clips by vessel j; false once the cell is empty.
+        let cut = |cell: &mut ConvexPolygon, j: usize| -> bool {
+            let d = vessels[j].position - p;
+            let d2 = norm2(d);
+            if d2 == 0.0 {
+                if ln_k[j] > ln_k[i] || (ln_k[j] == ln_k[i] && j < i) {
+                    cell.vertices.clear();
                 }
-                !cell.is_empty()
-            };
-            // Whether no vessel at distance ≥ `dist` can cut the cell any more.
-            let settled = |cell: &ConvexPolygon, dist: f64| {
-                let r2 = cell.max_distance2(Point { x: 0.0, y: 0.0 });
-                dist >= r2.sqrt() + (r2 + 2.0 * w_i).sqrt()
-            };
+            } else {
+                cell.clip(d, 0.5 * d2 - (ln_k[j] - ln_k[i]) / (2.0 * beta));
+            }
+            !cell.is_empty()
+        };
+        // Whether no vessel at distance ≥ `dist` can cut the cell any more.
+        let settled = |cell: &ConvexPolygon, dist: f64| {
+            let r2 = cell.max_distance2(Point { x: 0.0, y: 0.0 });
+            dist >= r2.sqrt() + (r2 + 2.0 * w_i).sqrt()
+        };
 
-            near.clear();
-            near.extend(
-                tree.locate_within_distance([p.x, p.y], first_radius * first_radius)
-                    .filter(|nb| nb.data != i)
-                    .map(|nb| (norm2(vessels[nb.data].position - p), nb.data)),
-            );
-            near.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-            let mut alive = true;
-            for &(d2, j) in &near {
-                if settled(&cell, d2.sqrt()) {
+        near.clear();
+        near.extend(
+            tree.locate_within_distance([p.x, p.y], first_radius * first_radius)
+                .filter(|nb| nb.data != i)
+                .map(|nb| (norm2(vessels[nb.data].position - p), nb.data)),
+        );
+        near.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        let mut alive = true;
+        for &(d2, j) in near.iter() {
+            if settled(&cell, d2.sqrt()) {
+                break;
+            }
+            alive = cut(&mut cell, j);
+            if !alive {
+                break;
+            }
+        }
+        if alive && !settled(&cell, first_radius) {
+            for (nb, d2) in tree.nearest_neighbor_iter_with_distance_2(&[p.x, p.y]) {
+                let j = nb.data;
+                if j == i || d2 <= first_radius * first_radius {
+                    continue; // itself, or already applied
+                }
+                if settled(&cell, d2.sqrt()) || !cut(&mut cell, j) {
                     break;
                 }
-                alive = cut(&mut cell, j);
-                if !alive {
-                    break;
-                }
             }
-            if alive && !settled(&cell, first_radius) {
-                for (nb, d2) in tree.nearest_neighbor_iter_with_distance_2(&[p.x, p.y]) {
-                    let j = nb.data;
-                    if j == i || d2 <= first_radius * first_radius {
-                        continue; // itself, or already applied
-                    }
-                    if settled(&cell, d2.sqrt()) || !cut(&mut cell, j) {
-                        break;
-                    }
-                }
-            }
-            if cell.is_empty() {
-                return CellGeometry::Empty;
-            }
-            cell.translate(p);
-            clip_to_region(cell, region)
-        })
-        .collect()
+        }
+        if cell.is_empty() {
+            return CellGeometry::Empty;
+        }
+        cell.translate(p);
+        clip_to_region(cell, region)
+    };
+    if parallel && vessels.len() >= super::PARALLEL_MIN {
+        use rayon::prelude::*;
+        (0..vessels.len())
+            .into_par_iter()
+            .map_init(Vec::new, |near, i| cell_of(i, near))
+            .collect()
+    } else {
+        let mut near = Vec::new();
+        (0..vessels.len()).map(|i| cell_of(i, &mut near)).collect()
+    }
 }
 
 /// Intersects a convex cell (world coordinates) with Q.

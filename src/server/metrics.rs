@@ -23,6 +23,33 @@ pub const COVERAGE_H: &str = "seacover_coverage_h";
 pub const MESSAGES_IN: &str = "seacover_messages_in_total";
 pub const MESSAGES_OUT: &str = "seacover_messages_out_total";
 pub const MESSAGES_REJECTED: &str = "seacover_messages_rejected_total";
+/// From the moment a tick was due to its command written to the link's
+/// socket, per command.
+pub const COMMAND_DELAY: &str = "seacover_command_delay_seconds";
+/// Wall-clock (Unix) time at which tick 0 was due; tick N is due at
+/// origin + N × period.
+pub const TICK_ORIGIN: &str = "seacover_tick_origin_seconds";
+/// Wall-clock seconds between ticks (1 / (tick_hz × time warp)).
+pub const TICK_PERIOD: &str = "seacover_tick_period_seconds";
+
+/// `COMMAND_DELAY`'s buckets: every millisecond up to 40 ms, where the
+/// 20 ms target lies, then coarser; `seacover bench load` reads its
+/// percentiles from them.
+pub const COMMAND_DELAY_BUCKETS: [f64; 46] = {
+    let mut b = [0.0; 46];
+    let mut i = 0;
+    while i < 40 {
+        b[i] = (i + 1) as f64 * 1e-3;
+        i += 1;
+    }
+    let tail = [0.05, 0.1, 0.2, 0.5, 1.0, 5.0];
+    let mut j = 0;
+    while j < tail.len() {
+        b[40 + j] = tail[j];
+        j += 1;
+    }
+    b
+};
 
 static HANDLE: OnceLock<PrometheusHandle> = OnceLock::new();
 
@@ -35,6 +62,11 @@ pub fn handle() -> &'static PrometheusHandle {
                 &[
                     1e-5, 3e-5, 1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2, 0.1, 0.3, 1.0,
                 ],
+            )
+            .expect("non-empty buckets")
+            .set_buckets_for_metric(
+                Matcher::Full(COMMAND_DELAY.to_string()),
+                &COMMAND_DELAY_BUCKETS,
             )
             .expect("non-empty buckets");
         let recorder = builder.build_recorder();

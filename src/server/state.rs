@@ -5,10 +5,12 @@
 //!   HTTP handlers talk to it through a bounded channel of [`Request`]s and
 //!   read the newest [`Snapshot`] from a `watch`; no lock is ever held across
 //!   an `.await`;
-//! - a tick that overruns is skipped (`MissedTickBehavior::Skip`), never
-//!   queued;
-//! - mission time advances exactly 1/tick_hz per tick, whatever the time warp,
-//!   so guidance filters and liveness are in mission seconds.
+//! - a tick that overruns makes the next ones be skipped
+//!   (`MissedTickBehavior::Skip`), never queued; skipped ticks keep their
+//!   numbers, so tick N is always mission time N / tick_hz and is due at
+//!   wall time origin + N / (tick_hz × time warp);
+//! - mission time is in mission seconds whatever the time warp, so guidance
+//!   filters and liveness are in mission seconds.
 
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -151,13 +153,12 @@ pub enum Request {
         id: String,
         link: u64,
         actuator: Option<ActuatorDocument>,
-        tx: mpsc::Sender<CoordinatorMessage>,
+        tx: mpsc::Sender<Outgoing>,
+        /// The link's newest pose. A slot rather than a request per pose:
+        /// the tick only ever wants the newest, and 1000 vessels at 20 Hz
+        /// would otherwise wake this task 20,000 times a second.
+        poses: watch::Receiver<Option<PoseDocument>>,
         reply: oneshot::Sender<Result<f64, ApiError>>,
-    },
-    Pose {
-        id: String,
-        link: u64,
-        pose: PoseDocument,
     },
     /// A link closed.
     Gone { id: String, link: u64 },
@@ -358,7 +359,23 @@ pub struct TickSettings {
 
 struct Link {
     id: u64,
-    tx: mpsc::Sender<CoordinatorMessage>,
+    tx: mpsc::Sender<Outgoing>,
+    poses: watch::Receiver<Option<PoseDocument>>,
+}
+
+/// What the tick task hands a link to send: a message, and for a command the
+/// moment its tick was due, so the link can record how long the command took
+/// to reach the socket (`seacover_command_delay_seconds`).
+#[derive(Debug)]
+pub struct Outgoing {
+    pub message: CoordinatorMessage,
+    pub due: Option<std::time::Instant>,
+}
+
+impl From<CoordinatorMessage> for Outgoing {
+    fn from(message: CoordinatorMessage) -> Self {
+        Outgoing { message, due: None }
+    }
 }
 
 struct Entry {
@@ -368,6 +385,25 @@ struct Entry {
     last_seen_tick: Option<u64>,
     guidance: Guidance,
     last_command: Option<CommandDocument>,
+}
+
+/// Takes a link's pose into its entry when the link has sent a new one since
+/// the last look; the vessel was then seen at `tick`.
+fn take_pose(entry: &mut Entry, poses: &mut watch::Receiver<Option<PoseDocument>>, tick: u64) {
+    let newest = poses.borrow_and_update();
+    if newest.has_changed()
+        && let Some(pose) = newest.as_ref()
+    {
+        entry.pose = Some(pose.clone());
+        entry.last_seen_tick = Some(tick);
+    }
+}
+
+/// What a tick computed, for [`Coordinator::finish_tick`].
+struct Published {
+    time: f64,
+    live: Vec<String>,
+    evaluation: Option<Evaluation>,
 }
 
 /// The tick task.
@@ -423,22 +459,39 @@ impl Coordinator {
             Duration::from_secs_f64(1.0 / (self.mission.tick_hz * self.settings.time_warp));
         let mut ticker = tokio::time::interval(period);
         ticker.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Skip);
+        // Tick N is due at origin + N × period (the interval's first tick,
+        // tick 1, fires at once). Published so that a client on the same
+        // host can measure a command's delay from the moment its tick was
+        // due, exactly, rather than estimate it (`seacover bench load`).
+        let origin = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0.0, |d| d.as_secs_f64())
+            - period.as_secs_f64();
+        metrics::gauge!(super::metrics::TICK_ORIGIN).set(origin);
+        metrics::gauge!(super::metrics::TICK_PERIOD).set(period.as_secs_f64());
         let mut last: Option<tokio::time::Instant> = None;
         loop {
             tokio::select! {
                 _ = shutdown.cancelled() => break,
-                now = ticker.tick() => {
-                    if let Some(prev) = last {
-                        // Ticks the interval skipped because one overran.
-                        let missed = ((now - prev).as_secs_f64() / period.as_secs_f64()).round() as u64;
-                        if missed > 1 {
-                            metrics::counter!(super::metrics::TICKS_SKIPPED).increment(missed - 1);
-                        }
+                due = ticker.tick() => {
+                    // Ticks the interval skipped because one overran keep
+                    // their numbers: tick N always means mission time
+                    // N / tick_hz, whatever the load.
+                    let advance = match last {
+                        Some(prev) => ((due - prev).as_secs_f64() / period.as_secs_f64()).round().max(1.0) as u64,
+                        None => 1,
+                    };
+                    if advance > 1 {
+                        metrics::counter!(super::metrics::TICKS_SKIPPED).increment(advance - 1);
                     }
-                    last = Some(now);
+                    last = Some(due);
                     let started = std::time::Instant::now();
-                    self.on_tick();
+                    let tick = self.on_tick(advance, due.into_std());
                     metrics::histogram!(super::metrics::TICK_SECONDS).record(started.elapsed().as_secs_f64());
+                    // The links woken with this tick's commands run first;
+                    // the snapshot for dashboards can wait a few ms.
+                    tokio::task::yield_now().await;
+                    self.finish_tick(tick);
                 }
                 request = requests.recv() => match request {
                     Some(r) => self.on_request(r),
@@ -448,10 +501,13 @@ impl Coordinator {
         }
         for entry in self.vessels.values() {
             if let Some(link) = &entry.link {
-                let _ = link.tx.try_send(CoordinatorMessage::Error {
-                    code: ApiError::ShuttingDown.code().to_string(),
-                    message: ApiError::ShuttingDown.to_string(),
-                });
+                let _ = link.tx.try_send(
+                    CoordinatorMessage::Error {
+                        code: ApiError::ShuttingDown.code().to_string(),
+                        message: ApiError::ShuttingDown.to_string(),
+                    }
+                    .into(),
+                );
             }
         }
     }
@@ -463,6 +519,7 @@ impl Coordinator {
                 link,
                 actuator,
                 tx,
+                poses,
                 reply,
             } => {
                 let actuator = actuator.unwrap_or(self.mission.actuator);
@@ -498,22 +555,21 @@ impl Coordinator {
                     last_command: None,
                 });
                 if let Some(old) = entry.link.take() {
-                    let _ = old.tx.try_send(CoordinatorMessage::Error {
-                        code: "replaced".into(),
-                        message: "another link for this vessel connected".into(),
-                    });
+                    let _ = old.tx.try_send(
+                        CoordinatorMessage::Error {
+                            code: "replaced".into(),
+                            message: "another link for this vessel connected".into(),
+                        }
+                        .into(),
+                    );
                 }
                 entry.actuator = actuator;
-                entry.link = Some(Link { id: link, tx });
+                entry.link = Some(Link {
+                    id: link,
+                    tx,
+                    poses,
+                });
                 let _ = reply.send(Ok(self.mission.tick_hz));
-            }
-            Request::Pose { id, link, pose } => {
-                if let Some(entry) = self.vessels.get_mut(&id)
-                    && entry.link.as_ref().is_some_and(|l| l.id == link)
-                {
-                    entry.pose = Some(pose);
-                    entry.last_seen_tick = Some(self.tick);
-                }
             }
             Request::Change { change, reply } => {
                 let outcome = self.mission.changed(&change).and_then(|(next, answer)| {
@@ -544,10 +600,14 @@ impl Coordinator {
                 let outcome = match self.vessels.remove(&id) {
                     Some(entry) => {
                         if let Some(link) = entry.link {
-                            let _ = link.tx.try_send(CoordinatorMessage::Error {
-                                code: "removed".into(),
-                                message: "an operator removed this vessel from the mission".into(),
-                            });
+                            let _ = link.tx.try_send(
+                                CoordinatorMessage::Error {
+                                    code: "removed".into(),
+                                    message: "an operator removed this vessel from the mission"
+                                        .into(),
+                                }
+                                .into(),
+                            );
                         }
                         let time = self.tick as f64 / self.mission.tick_hz;
                         let live = self.live_ids();
@@ -560,11 +620,26 @@ impl Coordinator {
                 let _ = reply.send(outcome);
             }
             Request::Gone { id, link } => {
+                let tick = self.tick;
                 if let Some(entry) = self.vessels.get_mut(&id)
                     && entry.link.as_ref().is_some_and(|l| l.id == link)
                 {
-                    entry.link = None;
+                    // A pose sent just before the link closed still counts.
+                    if let Some(mut link) = entry.link.take() {
+                        take_pose(entry, &mut link.poses, tick);
+                    }
                 }
+            }
+        }
+    }
+
+    /// Takes every link's newest pose, if it has a new one.
+    fn collect_poses(&mut self) {
+        let tick = self.tick;
+        for entry in self.vessels.values_mut() {
+            if let Some(mut link) = entry.link.take() {
+                take_pose(entry, &mut link.poses, tick);
+                entry.link = Some(link);
             }
         }
     }
@@ -586,8 +661,11 @@ impl Coordinator {
             .collect()
     }
 
-    fn on_tick(&mut self) {
-        self.tick += 1;
+    /// One tick, `advance` ticks after the previous one (more than one when
+    /// the interval skipped some), due at `due`.
+    fn on_tick(&mut self, advance: u64, due: std::time::Instant) -> Published {
+        self.tick += advance;
+        self.collect_poses();
         let time = self.tick as f64 / self.mission.tick_hz;
         let live = self.live_ids();
         let evaluation = self.evaluate_live(&live);
@@ -618,7 +696,10 @@ impl Coordinator {
                     // one supersedes it anyway.
                     if link
                         .tx
-                        .try_send(CoordinatorMessage::Command(doc.clone()))
+                        .try_send(Outgoing {
+                            message: CoordinatorMessage::Command(doc.clone()),
+                            due: Some(due),
+                        })
                         .is_err()
                     {
                         metrics::counter!(super::metrics::MESSAGES_REJECTED, "reason" => "link_full").increment(1);
@@ -627,6 +708,21 @@ impl Coordinator {
                 entry.last_command = Some(doc);
             }
         }
+        Published {
+            time,
+            live,
+            evaluation,
+        }
+    }
+
+    /// The second half of a tick, once its commands are on their way: the
+    /// snapshot for readers and the gauges.
+    fn finish_tick(&mut self, tick: Published) {
+        let Published {
+            time,
+            live,
+            evaluation,
+        } = tick;
         self.publish(time, &live, evaluation.as_ref());
         let connected = self.vessels.values().filter(|e| e.link.is_some()).count();
         metrics::gauge!(super::metrics::VESSELS_CONNECTED).set(connected as f64);
@@ -655,7 +751,12 @@ impl Coordinator {
             &self.mission.region,
             &self.mission.risk,
             &fleet,
-            &Options::default(),
+            // On every core: the evaluation is most of a tick's critical
+            // path, from the tick being due to the last command sent.
+            &Options {
+                parallel: true,
+                ..Options::default()
+            },
         ))
     }
 

@@ -1,8 +1,9 @@
 //! WebSocket endpoints: the vessel link (hello / welcome / pose / command /
 //! error) and the read-only dashboard stream.
 //!
-//! A link task never touches the fleet: it validates frames and forwards them
-//! to the tick task, and writes whatever the tick task sends it. Fatal
+//! A link task never touches the fleet: it validates frames, puts the newest
+//! pose in the link's pose slot (a `watch` the tick task reads each tick),
+//! and writes whatever the tick task sends it. Fatal
 //! protocol errors (a pose before hello, a frame over 64 KiB, repeated
 //! garbage) close that link only.
 
@@ -13,10 +14,10 @@ use axum::extract::State;
 use axum::extract::ws::{Message, Utf8Bytes, WebSocket, WebSocketUpgrade};
 use axum::response::Response;
 use futures_util::{SinkExt, StreamExt};
-use tokio::sync::{mpsc, oneshot};
+use tokio::sync::{mpsc, oneshot, watch};
 
 use super::AppState;
-use super::state::Request;
+use super::state::{Outgoing, Request};
 use crate::protocol::{CoordinatorMessage, PoseDocument, VesselMessage};
 use crate::scenario::valid_id;
 
@@ -108,7 +109,8 @@ async fn run_link(socket: WebSocket, app: AppState) {
     };
 
     let link = app.next_link.fetch_add(1, Ordering::Relaxed);
-    let (tx, mut rx) = mpsc::channel::<CoordinatorMessage>(16);
+    let (tx, mut rx) = mpsc::channel::<Outgoing>(16);
+    let (pose_tx, poses) = watch::channel(None);
     let (reply_tx, reply_rx) = oneshot::channel();
     let registered = app
         .requests
@@ -117,6 +119,7 @@ async fn run_link(socket: WebSocket, app: AppState) {
             link,
             actuator,
             tx,
+            poses,
             reply: reply_tx,
         })
         .await
@@ -159,10 +162,14 @@ async fn run_link(socket: WebSocket, app: AppState) {
                 break;
             }
             out = rx.recv() => match out {
-                Some(msg) => {
-                    let fatal = matches!(&msg, CoordinatorMessage::Error { .. });
-                    if sink.send(text(&msg)).await.is_err() || fatal {
+                Some(Outgoing { message, due }) => {
+                    let fatal = matches!(&message, CoordinatorMessage::Error { .. });
+                    if sink.send(text(&message)).await.is_err() || fatal {
                         break;
+                    }
+                    if let Some(due) = due {
+                        metrics::histogram!(super::metrics::COMMAND_DELAY)
+                            .record(due.elapsed().as_secs_f64());
                     }
                 }
                 None => break,
@@ -171,9 +178,7 @@ async fn run_link(socket: WebSocket, app: AppState) {
                 Some(Ok(Message::Text(t))) => match serde_json::from_str::<VesselMessage>(&t) {
                     Ok(VesselMessage::Pose(pose)) if finite(&pose) => {
                         metrics::counter!(super::metrics::MESSAGES_IN, "kind" => "pose").increment(1);
-                        if app.requests.send(Request::Pose { id: id.clone(), link, pose }).await.is_err() {
-                            break;
-                        }
+                        pose_tx.send_replace(Some(pose));
                     }
                     Ok(VesselMessage::Pose(_)) => {
                         let _ = sink.send(text(&error("invalid", "pose: every number must be finite"))).await;
