@@ -1,5 +1,7 @@
 //! Planar geometry for the coverage engine: the validated task region, convex
-//! polygon clipping, and Gauss quadrature rules on triangles.
+//! polygon clipping, and Gauss quadrature rules on triangles; and for safe
+//! motion: distances to the shore, a neighbour grid, and a roadmap of paths
+//! around islands.
 //!
 //! Invariants of this module (and of the whole pure core):
 //! - no I/O, no async, no global mutable state; every function is deterministic;
@@ -12,8 +14,11 @@
 //! (boolean operations, triangulation) without conversion.
 
 pub mod convex;
+pub mod grid;
 pub mod quadrature;
 pub mod region;
+pub mod roadmap;
+pub mod shore;
 
 pub use convex::ConvexPolygon;
 pub use quadrature::TriangleRule;
