@@ -13,12 +13,14 @@
 //! Code map: [`density`] Φ; [`fleet`] f_i and the vessels; [`partition`] the
 //! cells; [`integrate`] the integrals of one cell, by [`boundary`] edge
 //! integrals (default) or adaptive triangle quadrature (reference);
-//! [`evaluate`](mod@evaluate) ties them together.
+//! [`evaluate`](mod@evaluate) ties them together; [`goal`] turns a centroid
+//! into a goal a vessel can reach among islands.
 
 pub mod boundary;
 pub mod density;
 pub mod evaluate;
 pub mod fleet;
+pub mod goal;
 pub mod integrate;
 pub mod partition;
 
