@@ -163,10 +163,65 @@ impl Guidance {
     /// The command at time `t` for a vessel in `state` whose cell's centroid
     /// is `centroid`.
     pub fn update(&mut self, t: f64, state: &State, centroid: (f64, f64)) -> Command {
+        let e = (centroid.0 - state.x).hypot(centroid.1 - state.y);
+        self.steer(t, state, centroid, e, None)
+    }
+
+    /// The `course` mode's desired ground velocity towards `towards` with
+    /// `remaining` metres still to go (a route may bend, so that can exceed
+    /// the straight distance): w_d = S(remaining) along the line of sight,
+    /// 0 inside the arrival radius. The safety filter starts from this.
+    pub fn desired_velocity(
+        &self,
+        state: &State,
+        towards: (f64, f64),
+        remaining: f64,
+    ) -> (f64, f64) {
+        let g = self.gains;
+        let (ex, ey) = (towards.0 - state.x, towards.1 - state.y);
+        let sight = ex.hypot(ey);
+        let s = if remaining < g.arrival_radius {
+            0.0
+        } else {
+            (g.k_u1 * (sigmoid(g.b2 * remaining) - 0.5) + g.k_u2 * remaining).min(g.max_speed)
+        };
+        if sight > 0.0 {
+            (s * ex / sight, s * ey / sight)
+        } else {
+            (0.0, 0.0)
+        }
+    }
+
+    /// The command for a vessel steering towards `towards` with `remaining`
+    /// metres to go, and, in the `course` mode, tracking the ground velocity
+    /// `w_d` instead of its own desired one (the safety filter's output).
+    /// With `towards` the centroid, `remaining` its distance and `w_d` from
+    /// [`desired_velocity`](Self::desired_velocity), this is exactly
+    /// [`update`](Self::update). The `paper` mode ignores `w_d`: the literal
+    /// law steers the bow, not a ground velocity.
+    pub fn track(
+        &mut self,
+        t: f64,
+        state: &State,
+        towards: (f64, f64),
+        remaining: f64,
+        w_d: (f64, f64),
+    ) -> Command {
+        self.steer(t, state, towards, remaining, Some(w_d))
+    }
+
+    fn steer(
+        &mut self,
+        t: f64,
+        state: &State,
+        centroid: (f64, f64),
+        e: f64,
+        w_d: Option<(f64, f64)>,
+    ) -> Command {
         let g = self.gains;
         let (ex, ey) = (centroid.0 - state.x, centroid.1 - state.y);
-        let e = ex.hypot(ey);
-        let psi_r = if e > 0.0 { ey.atan2(ex) } else { state.psi };
+        let sight = ex.hypot(ey);
+        let psi_r = if sight > 0.0 { ey.atan2(ex) } else { state.psi };
 
         // Filtered rates from the previous tick.
         if let Some(last) = self.last {
@@ -197,15 +252,9 @@ impl Guidance {
                 }
             }
             GuidanceMode::Course => {
-                let s = if e < g.arrival_radius {
-                    0.0
-                } else {
-                    speed(e).min(g.max_speed)
-                };
-                let wd = if e > 0.0 {
-                    (s * ex / e, s * ey / e)
-                } else {
-                    (0.0, 0.0)
+                let wd = match w_d {
+                    Some(wd) => wd,
+                    None => self.desired_velocity(state, centroid, e),
                 };
                 let w = state.ground_velocity();
                 let dw = (wd.0 - w.0, wd.1 - w.1);

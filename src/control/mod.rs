@@ -10,14 +10,18 @@
 //! Code map: [`model`] parameters, presets and RK4 dynamics; [`disturbance`]
 //! τ_d(t); [`observer`] eq. 30; [`controller`] eq. 33–35; [`guidance`]
 //! eq. 10–13 and the converging `course` mode; [`lloyd`] the single-integrator
-//! baseline.
+//! baseline; [`safety`] the tick's safe motion among islands and vessels
+//! (goal, route, [`barrier`] filter over [`halfplanes`], tracking).
 
+pub mod barrier;
 pub mod controller;
 pub mod disturbance;
 pub mod guidance;
+pub mod halfplanes;
 pub mod lloyd;
 pub mod model;
 pub mod observer;
+pub mod safety;
 
 use std::f64::consts::PI;
 
