@@ -103,10 +103,29 @@ enum Command {
     },
     /// Simulate the closed loop (dynamics, observer, controller, guidance,
     /// coverage) in one process and write CSV, JSON and figures.
+    #[command(args_conflicts_with_subcommands = true)]
     Sim {
-        /// `paper` (built in) or a scenario JSON file.
+        #[command(subcommand)]
+        study: Option<SimStudy>,
+        /// `paper`, `harbour-8`, `harbour-30` (built in) or a scenario JSON
+        /// file.
         #[arg(long, default_value = "paper")]
         scenario: String,
+        /// Start where the scenario says (`scenario`) or at random legal
+        /// starts drawn with --seed (`random`; the harbour's fleets leave
+        /// from its staging area west of the pier).
+        #[arg(long, default_value = "scenario")]
+        starts: String,
+        /// The safety filter (collision and shore avoidance): `on` or `off`.
+        /// Goals and routes round islands are used either way.
+        #[arg(long, default_value = "on")]
+        safety: String,
+        /// Least distance between two vessels' centres [m].
+        #[arg(long, default_value_t = seacover::control::safety::SafetyParams::default().safety_distance)]
+        safety_distance: f64,
+        /// Least distance from a vessel's centre to the shore [m].
+        #[arg(long, default_value_t = seacover::control::safety::SafetyParams::default().shore_distance)]
+        shore_distance: f64,
         /// Simulated seconds.
         #[arg(long, default_value_t = 200.0)]
         duration: f64,
@@ -119,7 +138,7 @@ enum Command {
         /// Vessel preset: `paper` or `otter`.
         #[arg(long, default_value = "paper")]
         preset: String,
-        /// Seed of the random disturbances.
+        /// Seed of the random disturbances and of random starts.
         #[arg(long, default_value_t = 1)]
         seed: u64,
         /// Disturbances: `paper`, `gusts`, `current` or `none`.
@@ -128,6 +147,27 @@ enum Command {
         /// Skip the figures (CSV and JSON only).
         #[arg(long)]
         no_figures: bool,
+    },
+}
+
+#[derive(Subcommand)]
+enum SimStudy {
+    /// The harbour with 8 and 30 vessels from random starts, each seed with
+    /// the safety filter on and off: collisions, incursions, closest
+    /// approaches, H and interventions (docs/safety.md).
+    SafetyStudy {
+        /// Seeds 1..=N.
+        #[arg(long, default_value_t = 50)]
+        seeds: u64,
+        /// Simulated seconds per run.
+        #[arg(long, default_value_t = 400.0)]
+        duration: f64,
+        /// Where to write study.json, table.md and the trails figure.
+        #[arg(long, default_value = "target/safety-study")]
+        out: PathBuf,
+        /// Runs at once (threads).
+        #[arg(long, default_value_t = 1)]
+        jobs: usize,
     },
 }
 
@@ -224,7 +264,28 @@ fn main() -> ExitCode {
             report(runtime().block_on(run))
         }
         Command::Sim {
+            study:
+                Some(SimStudy::SafetyStudy {
+                    seeds,
+                    duration,
+                    out,
+                    jobs,
+                }),
+            ..
+        } => match safety_study(seeds, duration, &out, jobs) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("seacover sim safety-study: {e:#}");
+                ExitCode::from(2)
+            }
+        },
+        Command::Sim {
+            study: None,
             scenario,
+            starts,
+            safety,
+            safety_distance,
+            shore_distance,
             duration,
             out,
             guidance,
@@ -233,13 +294,19 @@ fn main() -> ExitCode {
             disturbance,
             no_figures,
         } => match sim(
-            &scenario,
-            duration,
+            SimArgs {
+                scenario: &scenario,
+                starts: &starts,
+                safety: &safety,
+                safety_distance,
+                shore_distance,
+                duration,
+                guidance: &guidance,
+                preset: &preset,
+                seed,
+                disturbance: &disturbance,
+            },
             &out,
-            &guidance,
-            &preset,
-            seed,
-            &disturbance,
             !no_figures,
         ) {
             Ok(()) => ExitCode::SUCCESS,
@@ -480,21 +547,36 @@ async fn bench_load(
     Ok(())
 }
 
-#[allow(clippy::too_many_arguments)]
-fn sim(
-    scenario: &str,
+struct SimArgs<'a> {
+    scenario: &'a str,
+    starts: &'a str,
+    safety: &'a str,
+    safety_distance: f64,
+    shore_distance: f64,
     duration: f64,
-    out: &std::path::Path,
-    guidance: &str,
-    preset: &str,
+    guidance: &'a str,
+    preset: &'a str,
     seed: u64,
-    disturbance: &str,
-    figures: bool,
-) -> anyhow::Result<()> {
+    disturbance: &'a str,
+}
+
+fn sim(args: SimArgs, out: &std::path::Path, figures: bool) -> anyhow::Result<()> {
     use anyhow::{Context, bail};
     use seacover::control::guidance::GuidanceMode;
     use seacover::control::model::VesselParams;
     use seacover::sim::{Config, DisturbanceKind, load_scenario, run_to_dir};
+    let SimArgs {
+        scenario,
+        starts,
+        safety,
+        safety_distance,
+        shore_distance,
+        duration,
+        guidance,
+        preset,
+        seed,
+        disturbance,
+    } = args;
 
     if !(duration.is_finite() && duration > 0.0 && duration <= 86_400.0) {
         bail!("--duration must be in (0, 86400] s");
@@ -510,13 +592,27 @@ fn sim(
     let disturbance = DisturbanceKind::parse(disturbance).with_context(|| {
         format!("--disturbance: unknown model {disturbance:?} (paper, gusts, current, none)")
     })?;
-    let (scenario, headings) = load_scenario(scenario)?;
-    let mut config = Config::new(scenario, headings, duration);
+    let filter = match safety {
+        "on" => true,
+        "off" => false,
+        _ => bail!("--safety: must be on or off, got {safety:?}"),
+    };
+    let (loaded, headings) = load_scenario(scenario)?;
+    let mut config = Config::new(loaded, headings, duration);
     config.guidance.mode = mode;
     config.vessel = vessel;
     config.preset = preset.to_string();
     config.seed = seed;
     config.disturbance = disturbance;
+    config.safety.filter = filter;
+    config.safety.safety_distance = safety_distance;
+    config.safety.shore_distance = shore_distance;
+    config.safety.validate()?;
+    let config = match starts {
+        "scenario" => config,
+        "random" => config.with_random_starts(seed, seacover::sim::staging_zone(scenario))?,
+        _ => bail!("--starts: must be scenario or random, got {starts:?}"),
+    };
 
     let bar = std::io::IsTerminal::is_terminal(&std::io::stderr()).then(|| {
         let bar = indicatif::ProgressBar::new(1000);
@@ -526,7 +622,7 @@ fn sim(
         );
         bar
     });
-    let summary = run_to_dir(&config, out, figures, |f| {
+    let (summary, safety) = run_to_dir(&config, out, figures, |f| {
         if let Some(bar) = &bar {
             bar.set_position((f * 1000.0) as u64);
         }
@@ -535,6 +631,69 @@ fn sim(
         bar.finish_and_clear();
     }
     println!("{}", serde_json::to_string_pretty(&summary)?);
+    eprintln!(
+        "safety (filter {}): {} collisions, {} incursions, closest pair {:.2} m, closest to shore {:.2} m, interventions {:.2} % of vessel-ticks (safety.json)",
+        if safety.filter { "on" } else { "off" },
+        safety.collisions,
+        safety.incursions,
+        safety.min_pair_distance.unwrap_or(f64::INFINITY),
+        safety.min_shore_clearance,
+        100.0 * safety.intervention_rate,
+    );
+    Ok(())
+}
+
+fn safety_study(
+    seeds: u64,
+    duration: f64,
+    out: &std::path::Path,
+    jobs: usize,
+) -> anyhow::Result<()> {
+    use anyhow::{Context, ensure};
+    use seacover::sim::study;
+    ensure!(
+        (1..=10_000).contains(&seeds),
+        "--seeds must be in [1, 10000]"
+    );
+    ensure!(
+        duration.is_finite() && duration > 0.0 && duration <= 86_400.0,
+        "--duration must be in (0, 86400] s"
+    );
+    ensure!((1..=64).contains(&jobs), "--jobs must be in [1, 64]");
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let started = std::time::Instant::now();
+    let seed_list: Vec<u64> = (1..=seeds).collect();
+    let runs = study::run_study(&[8, 30], &seed_list, duration, jobs, |r| {
+        eprintln!(
+            "  {:>2} vessels, seed {:>3}, filter {:<3}: {} collisions, {} incursions, H {:.1}",
+            r.vessels,
+            r.seed,
+            if r.filter { "on" } else { "off" },
+            r.collisions,
+            r.incursions,
+            r.h_end
+        );
+    })?;
+    let summaries = study::summarize(&runs);
+    let table = study::table(&summaries);
+    let doc = serde_json::json!({"seeds": seeds, "duration": duration, "summaries": summaries, "runs": runs});
+    std::fs::write(
+        out.join("study.json"),
+        serde_json::to_string_pretty(&doc)? + "\n",
+    )?;
+    std::fs::write(out.join("table.md"), &table)?;
+    // The figure: the first seed of the bigger fleet, filter on.
+    let config = study::study_config(30, 1, true, duration)?;
+    let run = seacover::sim::run(&config, |_| {})?;
+    seacover::sim::figures::draw_trails(&out.join("harbour-30-trails"), &config, &run)
+        .map_err(anyhow::Error::msg)?;
+    print!("{table}");
+    eprintln!(
+        "{} runs in {:.0} s; study.json, table.md and harbour-30-trails.{{png,svg}} in {}",
+        runs.len(),
+        started.elapsed().as_secs_f64(),
+        out.display()
+    );
     Ok(())
 }
 

@@ -1,6 +1,8 @@
-//! The four figures of a run, as PNG and SVG (plotters), laid out like the
-//! paper's: Fig. 1 observer errors, Fig. 2 tracking errors, Fig. 3 H(P) and
-//! the comparison with Lloyd, Fig. 4 the evolution of the partition.
+//! The figures of a run, as PNG and SVG (plotters), the first four laid out
+//! like the paper's: Fig. 1 observer errors, Fig. 2 tracking errors, Fig. 3
+//! H(P) and the comparison with Lloyd, Fig. 4 the evolution of the
+//! partition; and Fig. 5, the whole run on one map: trails, islands, final
+//! cells and goals, with the safety watch's figures in the caption.
 //!
 //! Text is drawn with an embedded DejaVu Sans (`assets/fonts`), so figures
 //! need no system fonts or font libraries.
@@ -33,6 +35,7 @@ enum Figure {
     Tracking,
     Metric,
     Evolution,
+    Trails,
 }
 
 fn draw<DB: DrawingBackend>(
@@ -46,17 +49,25 @@ fn draw<DB: DrawingBackend>(
         Figure::Tracking => tracking(area, config, run),
         Figure::Metric => metric(area, config, run),
         Figure::Evolution => evolution(area, config, run),
+        Figure::Trails => trails(area, config, run),
     }
 }
 
 /// Draws every figure into `out` as `NAME.png` and `NAME.svg`.
 pub fn draw_all(out: &Path, config: &Config, run: &Run) -> Result<(), String> {
     register_font()?;
+    let (lo, hi) = config.scenario.region.bounds();
+    let aspect = ((hi.y - lo.y) / (hi.x - lo.x)).clamp(0.4, 1.6);
     let figures = [
         ("fig1-observer", (1200, 1000), Figure::Observer),
         ("fig2-tracking", (1400, 1000), Figure::Tracking),
         ("fig3-metric", (1400, 560), Figure::Metric),
         ("fig4-evolution", (1200, 1200), Figure::Evolution),
+        (
+            "fig5-trails",
+            (1400, (1300.0 * aspect) as u32 + 100),
+            Figure::Trails,
+        ),
     ];
     for (name, size, which) in figures {
         let png = out.join(format!("{name}.png"));
@@ -73,6 +84,26 @@ pub fn draw_all(out: &Path, config: &Config, run: &Run) -> Result<(), String> {
         }
     }
     Ok(())
+}
+
+/// Draws Fig. 5 alone, as `STEM.png` and `STEM.svg`.
+pub fn draw_trails(stem: &Path, config: &Config, run: &Run) -> Result<(), String> {
+    register_font()?;
+    let (lo, hi) = config.scenario.region.bounds();
+    let aspect = ((hi.y - lo.y) / (hi.x - lo.x)).clamp(0.4, 1.6);
+    let size = (1400, (1300.0 * aspect) as u32 + 100);
+    let png = stem.with_extension("png");
+    {
+        let area = BitMapBackend::new(&png, size).into_drawing_area();
+        trails(&area, config, run)?;
+        area.present()
+            .map_err(|e| format!("{}: {e}", png.display()))?;
+    }
+    let svg = stem.with_extension("svg");
+    let area = SVGBackend::new(&svg, size).into_drawing_area();
+    trails(&area, config, run)?;
+    area.present()
+        .map_err(|e| format!("{}: {e}", svg.display()))
 }
 
 fn err<E: std::fmt::Display>(e: E) -> String {
@@ -381,6 +412,139 @@ fn evolution<DB: DrawingBackend>(
                     .map_err(err)?;
             }
         }
+    }
+    Ok(())
+}
+
+/// Fig. 5: the whole run on one map.
+fn trails<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    config: &Config,
+    run: &Run,
+) -> Result<(), String> {
+    root.fill(&WHITE).map_err(err)?;
+    let region = &config.scenario.region;
+    let (lo, hi) = region.bounds();
+    let margin = 0.03 * (hi.x - lo.x).max(hi.y - lo.y);
+    let (x0, x1, y0, y1) = (lo.x - margin, hi.x + margin, lo.y - margin, hi.y + margin);
+    let r = &run.safety;
+    let last = run.ticks.last().ok_or("a run has ticks")?;
+    let caption = format!(
+        "{} vessels, {:.0} s, filter {}: {} collisions, {} incursions, closest pair {:.1} m, closest to shore {:.1} m, interventions {:.1} %",
+        config.scenario.ids.len(),
+        last.t,
+        if config.safety.filter { "on" } else { "off" },
+        r.collisions,
+        r.incursions,
+        r.min_pair_distance,
+        r.min_shore_clearance,
+        100.0 * r.intervention_rate(),
+    );
+    let mut chart = ChartBuilder::on(root)
+        .caption(caption, ("sans-serif", 20))
+        .margin(14)
+        .x_label_area_size(36)
+        .y_label_area_size(48)
+        .build_cartesian_2d(x0..x1, y0..y1)
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .disable_mesh()
+        .x_desc("x (m)")
+        .y_desc("y (m)")
+        .label_style(("sans-serif", 14))
+        .draw()
+        .map_err(err)?;
+    let ring = |r: &[crate::geometry::Point]| {
+        let mut pts: Vec<(f64, f64)> = r.iter().map(|p| (p.x, p.y)).collect();
+        pts.push(pts[0]);
+        pts
+    };
+    let land = RGBColor(214, 196, 150);
+    let water = RGBColor(222, 236, 248);
+    // Land everywhere, water inside the shell, land again on the islands.
+    chart
+        .draw_series(std::iter::once(Rectangle::new(
+            [(x0, y0), (x1, y1)],
+            land.filled(),
+        )))
+        .map_err(err)?;
+    chart
+        .draw_series(std::iter::once(Polygon::new(
+            ring(region.shell()),
+            water.filled(),
+        )))
+        .map_err(err)?;
+    for h in region.holes() {
+        chart
+            .draw_series(std::iter::once(Polygon::new(ring(h), land.filled())))
+            .map_err(err)?;
+        chart
+            .draw_series(std::iter::once(PathElement::new(
+                ring(h),
+                BLACK.stroke_width(2),
+            )))
+            .map_err(err)?;
+    }
+    chart
+        .draw_series(std::iter::once(PathElement::new(
+            ring(region.shell()),
+            BLACK.stroke_width(2),
+        )))
+        .map_err(err)?;
+    // Final cells.
+    if let Some(snap) = run.snapshots.last() {
+        for cell in &snap.cells {
+            for piece in cell.pieces(region).0 {
+                let pts: Vec<(f64, f64)> = piece.exterior().coords().map(|c| (c.x, c.y)).collect();
+                chart
+                    .draw_series(std::iter::once(PathElement::new(
+                        pts,
+                        RGBColor(90, 110, 140).stroke_width(1),
+                    )))
+                    .map_err(err)?;
+            }
+        }
+    }
+    // Trails, starts (small circles), the hull disc at the end, goals (×).
+    let px_per_m = 1300.0 / (x1 - x0);
+    for i in 0..config.scenario.ids.len() {
+        let color = Palette99::pick(i).to_rgba();
+        let trail: Vec<(f64, f64)> = run
+            .ticks
+            .iter()
+            .map(|t| (t.vessels[i].state.x, t.vessels[i].state.y))
+            .collect();
+        chart
+            .draw_series(std::iter::once(PathElement::new(
+                trail.clone(),
+                color.stroke_width(2),
+            )))
+            .map_err(err)?;
+        let start = trail[0];
+        chart
+            .draw_series(std::iter::once(Circle::new(
+                start,
+                4,
+                color.stroke_width(2),
+            )))
+            .map_err(err)?;
+        let v = &last.vessels[i];
+        let hull = ((config.hull_radius * px_per_m).round() as i32).max(3);
+        chart
+            .draw_series(std::iter::once(Circle::new(
+                (v.state.x, v.state.y),
+                hull,
+                color.filled(),
+            )))
+            .map_err(err)?;
+        chart
+            .draw_series(std::iter::once(Cross::new(
+                (v.goal.x, v.goal.y),
+                5,
+                BLACK.stroke_width(2),
+            )))
+            .map_err(err)?;
     }
     Ok(())
 }

@@ -7,21 +7,31 @@
 //! between ticks. Lloyd's single-integrator fleet (paper Fig. 3b) runs from
 //! the same start on the same ticks.
 //!
+//! Guidance goes through the same [`SafetyLayer`] as the coordinator's tick
+//! (reachable goals, routes round islands, the barrier filter when it is on),
+//! and [`monitor`] watches the true states at every dynamics step for
+//! collisions and incursions.
+//!
 //! This module is the shell around the pure core: it owns files (CSV, JSON,
 //! figures) and the progress bar; the loop itself is [`run`], which is pure.
 
 pub mod figures;
+pub mod monitor;
 pub mod output;
+pub mod starts;
+pub mod study;
 
 use crate::control::controller::{ControllerGains, Reference, control};
 use crate::control::disturbance::{Disturbance, Gusts};
 use crate::control::guidance::{Command, Guidance, GuidanceGains};
 use crate::control::model::{State, VesselParams, step};
 use crate::control::observer::{Observer, ObserverGains};
+use crate::control::safety::{SafetyLayer, SafetyParams};
 use crate::control::{Vec3, lloyd};
 use crate::coverage::{CellGeometry, Fleet, Options, Vessel, evaluate};
 use crate::geometry::Point;
 use crate::scenario::Scenario;
+use monitor::{Monitor, SafetyRecord};
 
 /// Which disturbance acts on the fleet.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -95,6 +105,12 @@ pub struct Config {
     pub lloyd_gain: f64,
     /// Times at which to keep the partition for the evolution figure.
     pub snapshots: Vec<f64>,
+    /// Goals, routes and the barrier filter (`safety.filter`).
+    pub safety: SafetyParams,
+    /// Radius of the disc taken as a hull, for collisions and incursions [m].
+    pub hull_radius: f64,
+    /// Whether to run Lloyd's baseline beside the fleet.
+    pub lloyd: bool,
 }
 
 /// One vessel at one tick.
@@ -103,6 +119,10 @@ pub struct VesselSample {
     pub state: State,
     pub command: Command,
     pub centroid: Point,
+    /// The reachable goal the vessel steers for (the centroid, projected).
+    pub goal: Point,
+    /// Whether the safety filter changed this tick's command.
+    pub intervened: bool,
     pub tau_d: Vec3,
     pub estimate: Vec3,
 }
@@ -140,6 +160,8 @@ pub struct Run {
     pub ticks: Vec<Tick>,
     pub snapshots: Vec<Snapshot>,
     pub measures: Measures,
+    /// Collisions, incursions, closest approaches and interventions.
+    pub safety: SafetyRecord,
 }
 
 /// Why a run failed.
@@ -158,16 +180,37 @@ pub enum SimError {
 /// The paper's scenario (paper section 5), built in.
 pub const PAPER_SCENARIO: &str = include_str!("../../examples/paper.json");
 
-/// Loads `paper` (built in) or a scenario file; returns it with the vessels'
-/// initial headings.
+/// A harbour with three islands and a pier, 30 vessels, built in
+/// (`harbour-8` takes its first eight vessels).
+pub const HARBOUR_SCENARIO: &str = include_str!("../../examples/harbour.json");
+
+/// Names of the built-in scenarios.
+pub const BUILT_IN: [&str; 3] = ["paper", "harbour-8", "harbour-30"];
+
+/// Where random starts of a built-in scenario are drawn: the harbour's fleet
+/// leaves from the basin west of the pier and south of the octagonal island
+/// (x ≤ 85 m, y ≤ 75 m), so it must spread past the pier, the islands and
+/// each other; other scenarios use the whole region.
+pub fn staging_zone(spec: &str) -> Option<(Point, Point)> {
+    spec.starts_with("harbour-")
+        .then_some((Point { x: 0.0, y: 0.0 }, Point { x: 85.0, y: 75.0 }))
+}
+
+/// Loads a built-in scenario (`paper`, `harbour-8`, `harbour-30`) or a
+/// scenario file; returns it with the vessels' initial headings.
 pub fn load_scenario(spec: &str) -> Result<(Scenario, Vec<f64>), SimError> {
-    let text = if spec == "paper" {
-        PAPER_SCENARIO.to_string()
-    } else {
-        std::fs::read_to_string(spec)
-            .map_err(|e| SimError::Io(format!("cannot read {spec}: {e}")))?
+    let (text, keep) = match spec {
+        "paper" => (PAPER_SCENARIO.to_string(), usize::MAX),
+        "harbour-8" => (HARBOUR_SCENARIO.to_string(), 8),
+        "harbour-30" => (HARBOUR_SCENARIO.to_string(), 30),
+        _ => (
+            std::fs::read_to_string(spec)
+                .map_err(|e| SimError::Io(format!("cannot read {spec}: {e}")))?,
+            usize::MAX,
+        ),
     };
-    let doc = crate::scenario::parse_document(&text)?;
+    let mut doc = crate::scenario::parse_document(&text)?;
+    doc.vessels.truncate(keep);
     let scenario = Scenario::from_document(&doc)?;
     let headings = doc.vessels.iter().map(|v| v.psi.unwrap_or(0.0)).collect();
     Ok((scenario, headings))
@@ -192,30 +235,74 @@ impl Config {
             seed: 1,
             lloyd_gain: 0.5,
             snapshots: vec![0.0, duration / 8.0, duration / 3.0, duration],
+            safety: SafetyParams::default(),
+            hull_radius: DEFAULT_HULL_RADIUS,
+            lloyd: true,
         }
+    }
+
+    /// The same run from random starts drawn with `seed` inside `zone` (the
+    /// whole region when `None`; see [`starts`]): legal for the safety
+    /// parameters, headings uniform.
+    pub fn with_random_starts(
+        mut self,
+        seed: u64,
+        zone: Option<(Point, Point)>,
+    ) -> Result<Config, SimError> {
+        let shore = crate::geometry::shore::Shore::new(&self.scenario.region);
+        let n = self.scenario.fleet.len();
+        let drawn = starts::random_starts(
+            &shore,
+            n,
+            seed,
+            self.safety.safety_distance,
+            self.safety.goal_clearance(),
+            zone,
+        )
+        .ok_or_else(|| SimError::Io(format!("no room for {n} random starts in the region")))?;
+        let beta = self.scenario.fleet.beta();
+        let vessels = drawn
+            .iter()
+            .zip(self.scenario.fleet.vessels())
+            .map(|((q, _), v)| Vessel {
+                position: *q,
+                k: v.k,
+                beta,
+            })
+            .collect();
+        self.scenario.fleet = Fleet::new(vessels)
+            .map_err(|e| SimError::Scenario(crate::scenario::ScenarioError::Input(e)))?;
+        self.headings = drawn.iter().map(|(_, psi)| *psi).collect();
+        Ok(self)
     }
 }
 
-/// Runs `config` and writes `timeseries.csv`, `summary.json` and (with
-/// `figures`) the four figures into `out`.
+/// The hull radius of the paper's vessel as the safety watch sees it [m]:
+/// a 2-tonne workboat of about 4 m by 2 m, inside a disc of radius 2 m.
+pub const DEFAULT_HULL_RADIUS: f64 = 2.0;
+
+/// Runs `config` and writes `timeseries.csv`, `summary.json`, `safety.json`
+/// and (with `figures`) the five figures into `out`.
 pub fn run_to_dir(
     config: &Config,
     out: &std::path::Path,
     figures: bool,
     progress: impl FnMut(f64),
-) -> Result<output::Summary, SimError> {
+) -> Result<(output::Summary, output::SafetySummary), SimError> {
     let io = |e: std::io::Error| SimError::Io(format!("{}: {e}", out.display()));
     std::fs::create_dir_all(out).map_err(io)?;
     let started = std::time::Instant::now();
     let result = run(config, progress)?;
     let wall = started.elapsed().as_secs_f64();
     let summary = output::Summary::new(config, &result, wall);
+    let safety = output::SafetySummary::new(config, &result);
     output::write_timeseries(&out.join("timeseries.csv"), config, &result).map_err(io)?;
     output::write_summary(&out.join("summary.json"), &summary).map_err(io)?;
+    output::write_safety(&out.join("safety.json"), &safety).map_err(io)?;
     if figures {
         figures::draw_all(out, config, &result).map_err(SimError::Figure)?;
     }
-    Ok(summary)
+    Ok((summary, safety))
 }
 
 fn fleet_at(config: &Config, positions: impl Iterator<Item = Point>) -> Option<Fleet> {
@@ -268,6 +355,15 @@ pub fn run(config: &Config, mut progress: impl FnMut(f64)) -> Result<Run, SimErr
         .map(|_| Observer::new(config.vessel, observer_gains))
         .collect();
     let mut guidance: Vec<Guidance> = (0..n).map(|_| Guidance::new(config.guidance)).collect();
+    let layer = SafetyLayer::new(region, config.safety)
+        .map_err(|e| SimError::Scenario(crate::scenario::ScenarioError::Input(e)))?;
+    let mut monitor = Monitor::new(
+        n,
+        config.hull_radius,
+        config.safety.safety_distance,
+        config.safety.shore_distance,
+        1.0 / config.tick_hz,
+    );
     let mut references = vec![Reference::default(); n];
     let mut commands = vec![Command::default(); n];
     let mut lloyd_positions: Vec<Point> = config
@@ -300,14 +396,20 @@ pub fn run(config: &Config, mut progress: impl FnMut(f64)) -> Result<Run, SimErr
             let fleet = fleet_at(config, states.iter().map(|s| Point { x: s.x, y: s.y }))
                 .ok_or(SimError::Diverged { vessel: 0, t })?;
             let eval = evaluate(region, risk, &fleet, &options);
-            let lloyd_fleet = fleet_at(config, lloyd_positions.iter().copied())
-                .ok_or(SimError::Diverged { vessel: 0, t })?;
-            let lloyd_eval = evaluate(region, risk, &lloyd_fleet, &options);
+            let lloyd_eval = if config.lloyd {
+                let lloyd_fleet = fleet_at(config, lloyd_positions.iter().copied())
+                    .ok_or(SimError::Diverged { vessel: 0, t })?;
+                Some(evaluate(region, risk, &lloyd_fleet, &options))
+            } else {
+                None
+            };
 
+            let safe = layer.commands(t, &states, &eval.cells, &mut guidance);
+            monitor.tick(&states, layer.shore(), safe.iter().map(|c| c.intervened));
             let mut samples = Vec::with_capacity(n);
             for i in 0..n {
                 let c = eval.cells[i].centroid;
-                commands[i] = guidance[i].update(t, &states[i], (c.x, c.y));
+                commands[i] = safe[i].command;
                 references[i] = Reference {
                     u_d: commands[i].u_d,
                     r_d: commands[i].r_d,
@@ -318,6 +420,8 @@ pub fn run(config: &Config, mut progress: impl FnMut(f64)) -> Result<Run, SimErr
                     state: states[i],
                     command: commands[i],
                     centroid: c,
+                    goal: safe[i].goal,
+                    intervened: safe[i].intervened,
                     tau_d: disturbances[i].value(t, states[i].psi),
                     estimate: observers[i].estimate(),
                 });
@@ -332,17 +436,19 @@ pub fn run(config: &Config, mut progress: impl FnMut(f64)) -> Result<Run, SimErr
             ticks.push(Tick {
                 t,
                 h: eval.h,
-                lloyd_h: lloyd_eval.h,
+                lloyd_h: lloyd_eval.as_ref().map_or(f64::NAN, |e| e.h),
                 vessels: samples,
                 lloyd_positions: lloyd_positions.clone(),
             });
-            let centroids: Vec<Point> = lloyd_eval.cells.iter().map(|c| c.centroid).collect();
-            lloyd::step(
-                &mut lloyd_positions,
-                &centroids,
-                config.lloyd_gain,
-                per_tick as f64 * h,
-            );
+            if let Some(lloyd_eval) = lloyd_eval {
+                let centroids: Vec<Point> = lloyd_eval.cells.iter().map(|c| c.centroid).collect();
+                lloyd::step(
+                    &mut lloyd_positions,
+                    &centroids,
+                    config.lloyd_gain,
+                    per_tick as f64 * h,
+                );
+            }
             progress(t / config.duration);
         }
         if k == steps {
@@ -386,10 +492,12 @@ pub fn run(config: &Config, mut progress: impl FnMut(f64)) -> Result<Run, SimErr
             observers[i].actuate(Vec3::new(applied.0, 0.0, applied.1));
             states[i] = next;
         }
+        monitor.step(&states, layer.shore());
     }
     Ok(Run {
         ticks,
         snapshots,
         measures,
+        safety: monitor.record,
     })
 }

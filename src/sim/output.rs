@@ -1,4 +1,5 @@
-//! Files a run leaves behind: `timeseries.csv` and `summary.json`.
+//! Files a run leaves behind: `timeseries.csv`, `summary.json` and
+//! `safety.json`.
 
 use std::io::Write;
 use std::path::Path;
@@ -88,6 +89,58 @@ fn lloyd_e_max(config: &Config, tick: &super::Tick) -> f64 {
         .zip(&tick.lloyd_positions)
         .map(|(c, p)| crate::geometry::norm2(c.centroid - *p).sqrt())
         .fold(0.0, f64::max)
+}
+
+/// `safety.json`: what the safety watch measured (`docs/safety.md`). Kept
+/// apart from `summary.json`, whose keys are fixed by issue 3.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct SafetySummary {
+    pub filter: bool,
+    pub safety_distance: f64,
+    pub shore_distance: f64,
+    pub hull_radius: f64,
+    pub collisions: usize,
+    pub incursions: usize,
+    pub safety_distance_breaches: usize,
+    pub shore_distance_breaches: usize,
+    pub min_pair_distance: Option<f64>,
+    pub min_shore_clearance: f64,
+    pub intervention_rate: f64,
+    #[serde(rename = "H_end")]
+    pub h_end: f64,
+    /// Largest remaining route length to a goal at the end [m].
+    pub goal_distance_max_end: f64,
+}
+
+impl SafetySummary {
+    pub fn new(config: &Config, run: &Run) -> SafetySummary {
+        let r = &run.safety;
+        let last = run.ticks.last().expect("a run has a last tick");
+        SafetySummary {
+            filter: config.safety.filter,
+            safety_distance: config.safety.safety_distance,
+            shore_distance: config.safety.shore_distance,
+            hull_radius: config.hull_radius,
+            collisions: r.collisions,
+            incursions: r.incursions,
+            safety_distance_breaches: r.pair_breaches,
+            shore_distance_breaches: r.shore_breaches,
+            min_pair_distance: r
+                .min_pair_distance
+                .is_finite()
+                .then_some(r.min_pair_distance),
+            min_shore_clearance: r.min_shore_clearance,
+            intervention_rate: r.intervention_rate(),
+            h_end: last.h,
+            goal_distance_max_end: last.vessels.iter().map(|v| v.command.e).fold(0.0, f64::max),
+        }
+    }
+}
+
+/// Writes `safety.json`.
+pub fn write_safety(path: &Path, safety: &SafetySummary) -> std::io::Result<()> {
+    let text = serde_json::to_string_pretty(safety).expect("summaries serialize");
+    std::fs::write(path, text + "\n")
 }
 
 /// Writes `timeseries.csv`: one row per tick and vessel.

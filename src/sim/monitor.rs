@@ -1,0 +1,265 @@
+//! The safety watch of a simulated run: collisions, incursions and the
+//! closest approaches, measured on the true states at every integration
+//! step (1 kHz), not only at the coverage ticks.
+//!
+//! Definitions (`docs/safety.md`):
+//! - a **collision** is two vessels' centres closer than twice the hull
+//!   radius (their hull discs overlap); counted once per episode of a pair;
+//! - an **incursion** is a vessel's hull disc reaching the shore: its centre
+//!   outside Q (in an island, beyond the shell) or closer than the hull
+//!   radius to ∂Q; counted once per episode of a vessel;
+//! - **safety-distance breaches** count episodes of two centres closer than
+//!   the safety distance, or of a centre closer than the shore distance to
+//!   ∂Q — what the filter is meant to prevent, stricter than the above.
+//!
+//! Cost: checking all pairs and the shore at every step would dominate the
+//! run, so the checks are exact only where they can matter. At each tick
+//! every pair closer than D + 2 (v̂ + 5 m/s) T is kept as a candidate (v̂ the
+//! fleet's top speed at the tick, T the tick period): no other pair can
+//! come within D before the next tick unless a hull gains 5 m/s within one
+//! tick (50 m/s², far beyond any preset). For the shore each vessel keeps
+//! its last exact clearance and the distance it has run since; it is
+//! recomputed only once that could bring it within the shore distance
+//! (plus 0.5 m).
+
+use std::collections::BTreeSet;
+
+use crate::control::model::State;
+use crate::geometry::grid::NeighbourGrid;
+use crate::geometry::shore::Shore;
+use crate::geometry::{Point, norm2};
+
+/// Fleets up to this size also get their closest pair at every tick from
+/// all pairs.
+const ALL_PAIRS_UP_TO: usize = 200;
+
+/// What the watch found.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SafetyRecord {
+    pub collisions: usize,
+    pub incursions: usize,
+    pub pair_breaches: usize,
+    pub shore_breaches: usize,
+    /// Least distance between two centres [m] (∞ for one vessel).
+    pub min_pair_distance: f64,
+    /// Least signed distance of a centre to ∂Q [m] (negative: outside Q).
+    pub min_shore_clearance: f64,
+    /// Vessel-ticks at which the filter intervened, and all vessel-ticks.
+    pub interventions: usize,
+    pub vessel_ticks: usize,
+}
+
+impl SafetyRecord {
+    /// Fraction of vessel-ticks at which the filter changed the command.
+    pub fn intervention_rate(&self) -> f64 {
+        if self.vessel_ticks == 0 {
+            0.0
+        } else {
+            self.interventions as f64 / self.vessel_ticks as f64
+        }
+    }
+}
+
+/// The watch's state between steps.
+#[derive(Debug, Clone)]
+pub struct Monitor {
+    hull_radius: f64,
+    safety_distance: f64,
+    shore_distance: f64,
+    tick_period: f64,
+    candidates: Vec<(usize, usize)>,
+    colliding: BTreeSet<(usize, usize)>,
+    breaching: BTreeSet<(usize, usize)>,
+    last_clearance: Vec<f64>,
+    travelled: Vec<f64>,
+    last_position: Vec<Point>,
+    intruding: Vec<bool>,
+    near_shore: Vec<bool>,
+    pub record: SafetyRecord,
+}
+
+impl Monitor {
+    pub fn new(
+        n: usize,
+        hull_radius: f64,
+        safety_distance: f64,
+        shore_distance: f64,
+        tick_period: f64,
+    ) -> Monitor {
+        Monitor {
+            hull_radius,
+            safety_distance,
+            shore_distance,
+            tick_period,
+            candidates: Vec::new(),
+            colliding: BTreeSet::new(),
+            breaching: BTreeSet::new(),
+            last_clearance: vec![f64::NEG_INFINITY; n],
+            travelled: vec![0.0; n],
+            last_position: vec![Point { x: 0.0, y: 0.0 }; n],
+            intruding: vec![false; n],
+            near_shore: vec![false; n],
+            record: SafetyRecord {
+                collisions: 0,
+                incursions: 0,
+                pair_breaches: 0,
+                shore_breaches: 0,
+                min_pair_distance: f64::INFINITY,
+                min_shore_clearance: f64::INFINITY,
+                interventions: 0,
+                vessel_ticks: 0,
+            },
+        }
+    }
+
+    /// At a tick: new pair candidates, exact shore clearances, and the
+    /// filter's interventions of this tick.
+    pub fn tick(
+        &mut self,
+        states: &[State],
+        shore: &Shore,
+        intervened: impl Iterator<Item = bool>,
+    ) {
+        for flag in intervened {
+            self.record.vessel_ticks += 1;
+            self.record.interventions += usize::from(flag);
+        }
+        let positions: Vec<Point> = states.iter().map(|s| Point { x: s.x, y: s.y }).collect();
+        let top = states
+            .iter()
+            .map(|s| {
+                let (vx, vy) = s.ground_velocity();
+                vx.hypot(vy)
+            })
+            .fold(0.0, f64::max);
+        let radius =
+            self.safety_distance.max(2.0 * self.hull_radius) + 2.0 * (top + 5.0) * self.tick_period;
+        self.candidates.clear();
+        let grid = NeighbourGrid::new(&positions, radius);
+        let mut near = Vec::new();
+        for i in 0..positions.len() {
+            grid.within(i, radius, &mut near);
+            self.candidates
+                .extend(near.iter().filter(|&&j| j > i).map(|&j| (i, j)));
+        }
+        for (i, &q) in positions.iter().enumerate() {
+            self.shore_exact(i, q, shore);
+        }
+        // The closest pair even when none comes near: all pairs at the tick
+        // while that is cheap.
+        if positions.len() <= ALL_PAIRS_UP_TO {
+            for i in 0..positions.len() {
+                for j in i + 1..positions.len() {
+                    let d = norm2(positions[i] - positions[j]).sqrt();
+                    self.record.min_pair_distance = self.record.min_pair_distance.min(d);
+                }
+            }
+        }
+        self.pairs(&positions);
+    }
+
+    /// After an integration step.
+    pub fn step(&mut self, states: &[State], shore: &Shore) {
+        let positions: Vec<Point> = states.iter().map(|s| Point { x: s.x, y: s.y }).collect();
+        for (i, &p) in positions.iter().enumerate() {
+            self.travelled[i] += norm2(p - self.last_position[i]).sqrt();
+            self.last_position[i] = p;
+            if self.last_clearance[i] - self.travelled[i] < self.shore_distance + 0.5 {
+                self.shore_exact(i, p, shore);
+            }
+        }
+        self.pairs(&positions);
+    }
+
+    fn shore_exact(&mut self, i: usize, p: Point, shore: &Shore) {
+        let c = shore.signed_clearance(p);
+        self.last_clearance[i] = c;
+        self.travelled[i] = 0.0;
+        self.last_position[i] = p;
+        let r = &mut self.record;
+        r.min_shore_clearance = r.min_shore_clearance.min(c);
+        let intruding = c < self.hull_radius;
+        if intruding && !self.intruding[i] {
+            r.incursions += 1;
+        }
+        self.intruding[i] = intruding;
+        let near = c < self.shore_distance;
+        if near && !self.near_shore[i] {
+            r.shore_breaches += 1;
+        }
+        self.near_shore[i] = near;
+    }
+
+    fn pairs(&mut self, positions: &[Point]) {
+        let collide2 = (2.0 * self.hull_radius).powi(2);
+        let breach2 = self.safety_distance.powi(2);
+        for &(i, j) in &self.candidates {
+            let d2 = norm2(positions[i] - positions[j]);
+            self.record.min_pair_distance = self.record.min_pair_distance.min(d2.sqrt());
+            if d2 < collide2 {
+                if self.colliding.insert((i, j)) {
+                    self.record.collisions += 1;
+                }
+            } else {
+                self.colliding.remove(&(i, j));
+            }
+            if d2 < breach2 {
+                if self.breaching.insert((i, j)) {
+                    self.record.pair_breaches += 1;
+                }
+            } else {
+                self.breaching.remove(&(i, j));
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::control::Vec3;
+    use crate::geometry::Region;
+
+    fn at(x: f64, y: f64) -> State {
+        State {
+            x,
+            y,
+            psi: 0.0,
+            vel: Vec3::zeros(),
+        }
+    }
+
+    #[test]
+    fn counts_episodes_not_steps() {
+        let shore = Shore::new(
+            &Region::new(
+                vec![
+                    Point { x: 0.0, y: 0.0 },
+                    Point { x: 100.0, y: 0.0 },
+                    Point { x: 100.0, y: 100.0 },
+                    Point { x: 0.0, y: 100.0 },
+                ],
+                vec![],
+            )
+            .unwrap(),
+        );
+        let mut m = Monitor::new(2, 2.0, 8.0, 4.0, 0.1);
+        let mut s = vec![at(50.0, 50.0), at(58.0, 50.0)];
+        m.tick(&s, &shore, [false, true].into_iter());
+        // Vessel 1 runs through vessel 0 and on, then vessel 0 ashore.
+        for k in 0..200 {
+            s[1].x = 58.0 - 0.1 * k as f64;
+            m.step(&s, &shore);
+        }
+        for k in 0..110 {
+            s[0].y = 50.0 - 0.5 * k as f64;
+            m.step(&s, &shore);
+        }
+        let r = m.record;
+        assert_eq!((r.collisions, r.pair_breaches), (1, 1));
+        assert_eq!((r.incursions, r.shore_breaches), (1, 1));
+        assert!(r.min_pair_distance < 0.1);
+        assert!(r.min_shore_clearance < 0.0);
+        assert_eq!(r.intervention_rate(), 0.5);
+    }
+}
