@@ -274,3 +274,80 @@ proptest! {
         }
     }
 }
+
+/// Any region of the generators above.
+fn region() -> impl Strategy<Value = Region> {
+    prop_oneof![star().prop_map(|s| (s, vec![])), square_with_holes()]
+        .prop_map(|(shell, holes)| Region::new(shell, holes).expect("generated regions are valid"))
+}
+
+/// Distance from `q` to ∂Q over every edge, by brute force.
+fn shore_distance(region: &Region, q: Point) -> f64 {
+    std::iter::once(region.shell())
+        .chain(region.holes().iter().map(Vec::as_slice))
+        .flat_map(|ring| (0..ring.len()).map(move |k| (ring[k], ring[(k + 1) % ring.len()])))
+        .map(|(a, b)| seacover::geometry::segment_distance2(q, a, b).sqrt())
+        .fold(f64::INFINITY, f64::min)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    /// The shore's signed clearance is the distance to the nearest edge,
+    /// negative exactly outside Q.
+    #[test]
+    fn shore_clearance_is_the_distance_to_the_nearest_edge(
+        r in region(),
+        pts in prop::collection::vec((-20.0f64..120.0, -20.0f64..120.0), 20),
+    ) {
+        let shore = seacover::geometry::shore::Shore::new(&r);
+        for (x, y) in pts {
+            let q = p(x, y);
+            let c = shore.signed_clearance(q);
+            let d = shore_distance(&r, q);
+            prop_assert!((c.abs() - d).abs() <= 1e-9 * (1.0 + d), "{q:?}: {c} vs {d}");
+            if d > 1e-9 {
+                prop_assert_eq!(c > 0.0, r.contains(q), "{:?}", q);
+            }
+        }
+    }
+
+    /// A route's first leg never crosses the shore, is never shorter than the
+    /// straight line, and goes straight when the goal is in clear sight.
+    #[test]
+    fn routes_start_in_open_water(
+        r in region(),
+        pts in prop::collection::vec((0.0f64..100.0, 0.0f64..100.0), 12),
+    ) {
+        use seacover::geometry::roadmap::Roadmap;
+        use seacover::geometry::shore::Shore;
+        let shore = Shore::new(&r);
+        let map = Roadmap::new(&shore, 5.0, 3.25);
+        let water: Vec<Point> = pts.into_iter().map(|(x, y)| p(x, y)).filter(|q| shore.signed_clearance(*q) > 1.0).collect();
+        for w in water.windows(2) {
+            let (from, to) = (w[0], w[1]);
+            if let Some(leg) = map.leg(&shore, from, to) {
+                prop_assert!(shore.segment_clear(from, leg.towards, 0.0), "{from:?} → {:?}", leg.towards);
+                let straight = seacover::geometry::norm2(to - from).sqrt();
+                prop_assert!(leg.length >= straight - 1e-9);
+                if shore.segment_clear(from, to, 3.25) {
+                    prop_assert_eq!(leg.towards, to);
+                }
+            }
+        }
+    }
+
+    /// Goals lie in the water: in Q, and at the clearance wherever a cell's
+    /// piece leaves room for it.
+    #[test]
+    fn goals_are_in_the_water(c in case()) {
+        use seacover::coverage::goal::reachable_goal;
+        use seacover::geometry::shore::Shore;
+        let (region, _, fleet, e) = c.run(&Options::default());
+        let shore = Shore::new(&region);
+        for (cell, v) in e.cells.iter().zip(fleet.vessels()) {
+            let g = reachable_goal(&shore, cell, v.position, 2.0);
+            prop_assert!(region.contains(g), "goal {g:?} of {:?} outside Q", v.position);
+        }
+    }
+}

@@ -190,3 +190,75 @@ fn bad_arguments_exit_2() {
         assert!(!String::from_utf8_lossy(&out.stderr).contains("panicked"));
     }
 }
+
+#[test]
+fn harbour_runs_from_random_starts_report_their_safety() {
+    let (a, b) = (tmp("harbour-a"), tmp("harbour-b"));
+    let args = [
+        "--scenario",
+        "harbour-8",
+        "--starts",
+        "random",
+        "--seed",
+        "3",
+        "--duration",
+        "15",
+        "--no-figures",
+    ];
+    sim(&a, &args);
+    sim(&b, &[&args[..], &["--safety", "off"]].concat());
+    let read = |d: &Path| -> Value {
+        serde_json::from_str(&std::fs::read_to_string(d.join("safety.json")).unwrap()).unwrap()
+    };
+    let (on, off) = (read(&a), read(&b));
+    assert_eq!(on["filter"], true);
+    assert_eq!(off["filter"], false);
+    assert_eq!(off["intervention_rate"], 0.0);
+    for s in [&on, &off] {
+        for key in [
+            "collisions",
+            "incursions",
+            "min_pair_distance",
+            "min_shore_clearance",
+            "intervention_rate",
+            "H_end",
+        ] {
+            assert!(s[key].is_number(), "{key} in {s}");
+        }
+        // Random starts are legal: 8 m apart, off the shore.
+        assert!(s["min_pair_distance"].as_f64().unwrap() > 7.0);
+    }
+    // Random starts differ from the scenario's own.
+    let first = |d: &Path| {
+        let csv = std::fs::read_to_string(d.join("timeseries.csv")).unwrap();
+        csv.lines().nth(1).unwrap().to_string()
+    };
+    assert_eq!(first(&a), first(&b));
+    assert!(
+        !first(&a).contains(",12.000000,12.000000,"),
+        "{}",
+        first(&a)
+    );
+    for d in [a, b] {
+        std::fs::remove_dir_all(d).unwrap();
+    }
+}
+
+#[test]
+fn bad_safety_arguments_exit_2() {
+    for args in [
+        &["--safety", "maybe"][..],
+        &["--starts", "nowhere"],
+        &["--safety-distance", "-1"],
+        &["--scenario", "harbour-1000"],
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_seacover"))
+            .args(["sim", "--no-figures", "--duration", "1", "--out"])
+            .arg(std::env::temp_dir().join("seacover-test-bad-safety"))
+            .args(args)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        assert!(!String::from_utf8_lossy(&out.stderr).contains("panicked"));
+    }
+}
