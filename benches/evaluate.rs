@@ -42,20 +42,18 @@ fn evaluate(c: &mut Criterion) {
 /// evaluation that is not per-cell integration.
 fn partition(c: &mut Criterion) {
     let mut group = c.benchmark_group("partition");
-    for name in ["fleet-1000"] {
-        let scenario = load(name);
-        group
-            .sample_size(30)
-            .measurement_time(Duration::from_secs(4));
-        group.bench_function(name, |b| {
-            b.iter(|| {
-                black_box(seacover::coverage::partition::power_cells(
-                    black_box(&scenario.region),
-                    black_box(&scenario.fleet),
-                ))
-            })
-        });
-    }
+    let scenario = load("fleet-1000");
+    group
+        .sample_size(30)
+        .measurement_time(Duration::from_secs(4));
+    group.bench_function("fleet-1000", |b| {
+        b.iter(|| {
+            black_box(seacover::coverage::partition::power_cells(
+                black_box(&scenario.region),
+                black_box(&scenario.fleet),
+            ))
+        })
+    });
     group.finish();
 }
 

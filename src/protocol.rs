@@ -219,6 +219,33 @@ pub struct MissionDocument {
     pub actuator: ActuatorDocument,
     pub guidance: GuidanceDocument,
     pub tick_hz: f64,
+    /// Collision and shore avoidance; missions stored before it existed get
+    /// the defaults.
+    #[serde(default)]
+    pub safety: SafetyDocument,
+}
+
+/// The safety filter of a mission (routes round islands are always used).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
+pub struct SafetyDocument {
+    /// Whether the barrier filter changes commands to keep the distances.
+    pub filter: bool,
+    /// Least distance between two vessels' centres [m].
+    pub safety_distance: f64,
+    /// Least distance from a vessel's centre to the region's boundary and
+    /// islands [m].
+    pub shore_distance: f64,
+}
+
+impl Default for SafetyDocument {
+    fn default() -> Self {
+        let d = crate::control::safety::SafetyParams::default();
+        SafetyDocument {
+            filter: d.filter,
+            safety_distance: d.safety_distance,
+            shore_distance: d.shore_distance,
+        }
+    }
 }
 
 /// Guidance mode and gains of a mission.

@@ -55,6 +55,18 @@ pub struct ConfigFile {
     pub actuator: Option<ActuatorDocument>,
     #[serde(default)]
     pub guidance: GuidanceSection,
+    #[serde(default)]
+    pub safety: SafetySection,
+}
+
+/// The safety filter, each key defaulting to
+/// [`SafetyParams::default`](crate::control::safety::SafetyParams).
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SafetySection {
+    pub filter: Option<bool>,
+    pub safety_distance: Option<f64>,
+    pub shore_distance: Option<f64>,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -179,6 +191,16 @@ impl Settings {
                 *slot = v;
             }
         }
+        let s = file.safety;
+        if let Some(filter) = s.filter {
+            doc.safety.filter = filter;
+        }
+        if let Some(d) = s.safety_distance {
+            doc.safety.safety_distance = d;
+        }
+        if let Some(d) = s.shore_distance {
+            doc.safety.shore_distance = d;
+        }
         let mission = Mission::from_document(&doc)?;
         let liveness = file.server.liveness.unwrap_or(defaults.liveness);
         if !(liveness.is_finite() && liveness > 0.0 && liveness <= 3600.0) {
@@ -231,6 +253,11 @@ mod tests {
         assert_eq!(doc.risk.objects[0].id.as_deref(), Some("wreck"));
         assert_eq!(doc.guidance.max_speed, 1.5);
         assert_eq!(s.write_rate, 50);
+        assert_eq!(doc.safety.safety_distance, 8.0);
+        assert!(doc.safety.filter);
+        let off = Settings::parse("[safety]\nfilter = false\nsafety_distance = 12").unwrap();
+        assert!(!off.mission.safety.filter);
+        assert_eq!(off.mission.safety.safety_distance, 12.0);
     }
 
     #[test]
@@ -248,6 +275,8 @@ mod tests {
             ("[region]\npolygon = [[0, 0], [1, 1], [2, 2]]", "polygon"),
             ("[actuator]\nk = 0\nbeta = 0.001", "actuator"),
             ("[server]\nliveness = 0", "server.liveness"),
+            ("[safety]\nsafety_distance = -1", "safety.safety_distance"),
+            ("[safety]\nbraking = 1", "braking"),
             ("[server]\nwrite_rate = 0", "write_rate"),
             ("speed = 3", "speed"),
         ] {

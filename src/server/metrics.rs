@@ -23,6 +23,9 @@ pub const COVERAGE_H: &str = "seacover_coverage_h";
 pub const MESSAGES_IN: &str = "seacover_messages_in_total";
 pub const MESSAGES_OUT: &str = "seacover_messages_out_total";
 pub const MESSAGES_REJECTED: &str = "seacover_messages_rejected_total";
+/// Commands the safety filter changed (vessel-ticks); over
+/// `seacover_messages_out_total{kind="command"}` it is the intervention rate.
+pub const SAFETY_INTERVENTIONS: &str = "seacover_safety_interventions_total";
 /// From the moment a tick was due to its command written to the link's
 /// socket, per command.
 pub const COMMAND_DELAY: &str = "seacover_command_delay_seconds";

@@ -23,12 +23,13 @@ use super::error::ApiError;
 use super::store::Store;
 use crate::control::guidance::{Guidance, GuidanceGains, GuidanceMode};
 use crate::control::model::State;
+use crate::control::safety::{SafetyLayer, SafetyParams};
 use crate::coverage::{Evaluation, Fleet, Options, RiskField, Vessel, evaluate};
 use crate::geometry::{Point, Region};
 use crate::protocol::{
     ActuatorDocument, CommandDocument, CoordinatorMessage, CoverageDocument, GuidanceDocument,
     MissionDocument, PoseDocument, RegionDocument, RiskDocument, RiskObjectDocument,
-    SnapshotDocument, VesselStatusDocument,
+    SafetyDocument, SnapshotDocument, VesselStatusDocument,
 };
 use crate::scenario::{Scenario, evaluation_document};
 
@@ -42,6 +43,10 @@ pub struct Mission {
     pub actuator: ActuatorDocument,
     pub guidance: GuidanceGains,
     pub tick_hz: f64,
+    pub safety: SafetyParams,
+    /// The region's shore and route map with `safety`: rebuilt whenever
+    /// either changes, shared by the mission's clones.
+    pub layer: Arc<SafetyLayer>,
 }
 
 impl Mission {
@@ -55,6 +60,10 @@ impl Mission {
         for (i, o) in risk_doc.objects.iter_mut().enumerate() {
             o.id.get_or_insert_with(|| format!("object-{}", i + 1));
         }
+        let layer = Arc::new(
+            SafetyLayer::new(&scenario.region, SafetyParams::default())
+                .expect("default safety parameters are valid"),
+        );
         Mission {
             region_doc: doc.region.clone().expect("paper has a region"),
             risk_doc,
@@ -66,6 +75,8 @@ impl Mission {
             },
             guidance: GuidanceGains::default(),
             tick_hz: 10.0,
+            safety: SafetyParams::default(),
+            layer,
         }
     }
 
@@ -101,6 +112,11 @@ impl Mission {
                 )));
             }
         }
+        let safety = safety_params(&doc.safety);
+        let layer = Arc::new(
+            SafetyLayer::new(&region, safety)
+                .map_err(|e| ApiError::from(crate::scenario::ScenarioError::from(e)))?,
+        );
         Ok(Mission {
             region_doc: doc.region.clone(),
             risk_doc,
@@ -109,6 +125,8 @@ impl Mission {
             actuator: doc.actuator,
             guidance: guidance_gains(&doc.guidance)?,
             tick_hz: doc.tick_hz,
+            safety,
+            layer,
         })
     }
 
@@ -132,6 +150,11 @@ impl Mission {
                 filter_time: g.filter_time,
             },
             tick_hz: self.tick_hz,
+            safety: SafetyDocument {
+                filter: self.safety.filter,
+                safety_distance: self.safety.safety_distance,
+                shore_distance: self.safety.shore_distance,
+            },
         }
     }
 
@@ -203,6 +226,10 @@ impl Mission {
             MissionChange::Region(doc) => {
                 next.region = crate::scenario::region_from_document(doc)?;
                 next.region_doc = doc.clone();
+                next.layer = Arc::new(
+                    SafetyLayer::new(&next.region, next.safety)
+                        .map_err(|e| ApiError::from(crate::scenario::ScenarioError::from(e)))?,
+                );
                 None
             }
             MissionChange::Base(value) => {
@@ -296,6 +323,17 @@ fn risk_field(doc: &RiskDocument) -> Result<RiskField, ApiError> {
 
 /// Guidance gains from their document: a known mode, every gain finite and
 /// positive (the arrival radius may be zero).
+/// The mission's safety parameters: the document's three, the rest at their
+/// defaults (validated by [`SafetyLayer::new`]).
+pub fn safety_params(doc: &SafetyDocument) -> SafetyParams {
+    SafetyParams {
+        filter: doc.filter,
+        safety_distance: doc.safety_distance,
+        shore_distance: doc.shore_distance,
+        ..SafetyParams::default()
+    }
+}
+
 pub fn guidance_gains(doc: &GuidanceDocument) -> Result<GuidanceGains, ApiError> {
     let mode = GuidanceMode::parse(&doc.mode).ok_or_else(|| {
         ApiError::Invalid(format!(
@@ -670,17 +708,40 @@ impl Coordinator {
         let live = self.live_ids();
         let evaluation = self.evaluate_live(&live);
         if let Some(eval) = &evaluation {
-            for (i, id) in live.iter().enumerate() {
-                let entry = self.vessels.get_mut(id).expect("live vessels exist");
-                let pose = entry.pose.as_ref().expect("live vessels have a pose");
-                let state = State {
-                    x: pose.x,
-                    y: pose.y,
-                    psi: pose.psi,
-                    vel: crate::control::Vec3::new(pose.u, pose.v, pose.r),
-                };
-                let c = eval.cells[i].centroid;
-                let cmd = entry.guidance.update(time, &state, (c.x, c.y));
+            // The live entries, in `live`'s order (both are in id order).
+            let mut wanted = live.iter().peekable();
+            let mut entries: Vec<&mut Entry> = Vec::with_capacity(live.len());
+            for (id, entry) in self.vessels.iter_mut() {
+                if wanted.next_if(|w| *w == id).is_some() {
+                    entries.push(entry);
+                }
+            }
+            let states: Vec<State> = entries
+                .iter()
+                .map(|entry| {
+                    let pose = entry.pose.as_ref().expect("live vessels have a pose");
+                    State {
+                        x: pose.x,
+                        y: pose.y,
+                        psi: pose.psi,
+                        vel: crate::control::Vec3::new(pose.u, pose.v, pose.r),
+                    }
+                })
+                .collect();
+            // Goals inside the vessel's own piece of water, routes round
+            // islands and the collision filter: the same function as
+            // `seacover sim`.
+            let safe = {
+                let mut guidance: Vec<&mut Guidance> =
+                    entries.iter_mut().map(|e| &mut e.guidance).collect();
+                self.mission
+                    .layer
+                    .commands(time, &states, &eval.cells, &mut guidance)
+            };
+            let interventions = safe.iter().filter(|s| s.intervened).count();
+            metrics::counter!(super::metrics::SAFETY_INTERVENTIONS).increment(interventions as u64);
+            for ((entry, sc), cell) in entries.into_iter().zip(&safe).zip(&eval.cells) {
+                let (cmd, c) = (sc.command, cell.centroid);
                 let doc = CommandDocument {
                     tick: self.tick,
                     u_d: cmd.u_d,
@@ -814,5 +875,111 @@ impl Coordinator {
             coverage,
         };
         self.snapshot.send_replace(Arc::new(snapshot));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::control::Vec3;
+
+    /// Registers a vessel through the same request a link sends; returns
+    /// its pose slot and command queue.
+    fn register(
+        c: &mut Coordinator,
+        id: &str,
+        link: u64,
+    ) -> (
+        watch::Sender<Option<PoseDocument>>,
+        mpsc::Receiver<Outgoing>,
+    ) {
+        let (tx, rx) = mpsc::channel(16);
+        let (pose_tx, poses) = watch::channel(None);
+        let (reply, answer) = oneshot::channel();
+        c.on_request(Request::Register {
+            id: id.into(),
+            link,
+            actuator: None,
+            tx,
+            poses,
+            reply,
+        });
+        assert!(answer.blocking_recv().unwrap().is_ok());
+        (pose_tx, rx)
+    }
+
+    fn pose(x: f64, y: f64, psi: f64, u: f64) -> PoseDocument {
+        serde_json::from_value(serde_json::json!({
+            "t": 0.0, "x": x, "y": y, "psi": psi, "u": u, "v": 0.0, "r": 0.0
+        }))
+        .unwrap()
+    }
+
+    /// The tick's commands are exactly the safety layer's for the same poses
+    /// and cells (the function `seacover sim` calls), over several ticks, and
+    /// two vessels closing head on inside the safety distance make the
+    /// filter act.
+    #[test]
+    fn tick_commands_are_the_safety_layers() {
+        let mission = Mission::paper();
+        let settings = TickSettings {
+            time_warp: 1.0,
+            liveness: 3.0,
+        };
+        let (mut c, _snapshots) = Coordinator::new(mission.clone(), settings, None);
+        let starts = [
+            ("usv-1", 40.0, 50.0, 0.0, 1.2),
+            ("usv-2", 45.0, 50.0, std::f64::consts::PI, 1.2),
+            ("usv-3", 20.0, 80.0, 1.0, 0.3),
+        ];
+        let mut links: Vec<_> = starts
+            .iter()
+            .enumerate()
+            .map(|(i, s)| register(&mut c, s.0, i as u64))
+            .collect();
+        let mut local: Vec<Guidance> = starts
+            .iter()
+            .map(|_| Guidance::new(mission.guidance))
+            .collect();
+        let mut intervened = 0;
+        for tick in 0..3 {
+            let states: Vec<State> = starts
+                .iter()
+                .map(|s| State {
+                    x: s.1 + 0.1 * tick as f64,
+                    y: s.2,
+                    psi: s.3,
+                    vel: Vec3::new(s.4, 0.0, 0.0),
+                })
+                .collect();
+            for ((pose_tx, _), s) in links.iter().zip(&states) {
+                pose_tx.send_replace(Some(pose(s.x, s.y, s.psi, s.vel.x)));
+            }
+            let published = c.on_tick(1, std::time::Instant::now());
+            let eval = published.evaluation.as_ref().unwrap();
+            let expected = mission
+                .layer
+                .commands(published.time, &states, &eval.cells, &mut local);
+            intervened += expected.iter().filter(|s| s.intervened).count();
+            for ((_, rx), want) in links.iter_mut().zip(&expected) {
+                let Ok(Outgoing {
+                    message: CoordinatorMessage::Command(got),
+                    due: Some(_),
+                }) = rx.try_recv()
+                else {
+                    panic!("tick {tick}: no command");
+                };
+                assert_eq!(got.tick, tick + 1);
+                assert_eq!(
+                    (got.u_d, got.r_d, got.e),
+                    (want.command.u_d, want.command.r_d, want.command.e),
+                    "tick {tick}"
+                );
+            }
+        }
+        assert!(
+            intervened >= 2,
+            "the head-on pair never triggered the filter"
+        );
     }
 }

@@ -147,6 +147,11 @@ impl Store {
             actuator: parse::<ActuatorDocument>("actuator", &actuator)?,
             guidance: parse::<GuidanceDocument>("guidance", &guidance)?,
             tick_hz: parse("tick_hz", &tick_hz)?,
+            // Stores written before safety existed have none: defaults.
+            safety: match get("safety")? {
+                Some(text) => parse("safety", &text)?,
+                None => Default::default(),
+            },
         }))
     }
 
@@ -158,6 +163,7 @@ impl Store {
             meta.insert("actuator", json(&mission.actuator).as_str())?;
             meta.insert("guidance", json(&mission.guidance).as_str())?;
             meta.insert("tick_hz", json(&mission.tick_hz).as_str())?;
+            meta.insert("safety", json(&mission.safety).as_str())?;
             objects.retain(|_, _| false)?;
             let mut seq = 0u64;
             for object in &mission.risk.objects {
