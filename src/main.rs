@@ -116,8 +116,10 @@ enum Command {
         /// from its staging area west of the pier).
         #[arg(long, default_value = "scenario")]
         starts: String,
-        /// The safety filter (collision and shore avoidance): `on` or `off`.
-        /// Goals and routes round islands are used either way.
+        /// `on`: reachable goals, routes round islands and the safety filter
+        /// (collision and shore avoidance); `off`: goals and routes without
+        /// the filter; `none`: straight at the centroids, no filter (the
+        /// paper's pipeline, for reproducing it).
         #[arg(long, default_value = "on")]
         safety: String,
         /// Least distance between two vessels' centres [m].
@@ -592,10 +594,11 @@ fn sim(args: SimArgs, out: &std::path::Path, figures: bool) -> anyhow::Result<()
     let disturbance = DisturbanceKind::parse(disturbance).with_context(|| {
         format!("--disturbance: unknown model {disturbance:?} (paper, gusts, current, none)")
     })?;
-    let filter = match safety {
-        "on" => true,
-        "off" => false,
-        _ => bail!("--safety: must be on or off, got {safety:?}"),
+    let (filter, reachable_goals) = match safety {
+        "on" => (true, true),
+        "off" => (false, true),
+        "none" => (false, false),
+        _ => bail!("--safety: must be on, off or none, got {safety:?}"),
     };
     let (loaded, headings) = load_scenario(scenario)?;
     let mut config = Config::new(loaded, headings, duration);
@@ -605,6 +608,7 @@ fn sim(args: SimArgs, out: &std::path::Path, figures: bool) -> anyhow::Result<()
     config.seed = seed;
     config.disturbance = disturbance;
     config.safety.filter = filter;
+    config.safety.reachable_goals = reachable_goals;
     config.safety.safety_distance = safety_distance;
     config.safety.shore_distance = shore_distance;
     config.safety.validate()?;

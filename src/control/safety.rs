@@ -21,6 +21,10 @@
 //! 5. **Tracking**: the `course` guidance turns that ground velocity into
 //!    (u_d, r_d) for the underactuated hull ([`Guidance::track`]).
 //!
+//! With `reachable_goals` off, steps 1–2 are skipped and each vessel steers
+//! straight at its centroid: with the filter off too, that is exactly the
+//! plain guidance of the paper's pipeline (`seacover sim --safety none`).
+//!
 //! Under `guidance = paper` the literal law steers the bow at the route's
 //! first point; it has no desired ground velocity, so the filter cannot act
 //! on it and reports no intervention (the literal law is for reproducing
@@ -47,8 +51,8 @@
 //!   is served (and debug builds assert).
 //! - Cost: O(n k) for k neighbours within reach, plus, for vessels whose goal
 //!   is out of sight, O(W) visibility tests against the route map's W
-//!   waypoints; at 1000 vessels it is well under a millisecond in open water
-//!   (`cargo bench --bench sim`).
+//!   waypoints; at 1000 vessels about 1.7 ms (`cargo bench --bench sim --
+//!   safety`), beside 5.7 ms for the evaluation.
 
 use std::borrow::BorrowMut;
 
@@ -64,8 +68,12 @@ use crate::geometry::{Point, Region, norm2};
 /// Safety parameters of a mission.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SafetyParams {
-    /// Whether the barrier filter acts (goals and routes are always used).
+    /// Whether the barrier filter acts.
     pub filter: bool,
+    /// Whether vessels steer for reachable goals along routes round islands
+    /// (steps 1–2 of the pipeline); without, they steer straight at their
+    /// centroids, as the paper's fleet does.
+    pub reachable_goals: bool,
     /// Least distance between two vessels' centres [m].
     pub safety_distance: f64,
     /// Least distance from a vessel's centre to the shore (shell and
@@ -94,6 +102,7 @@ impl Default for SafetyParams {
     fn default() -> Self {
         SafetyParams {
             filter: true,
+            reachable_goals: true,
             safety_distance: 8.0,
             shore_distance: 4.0,
             reaction_time: 2.5,
@@ -218,10 +227,13 @@ impl SafetyLayer {
             .map(|i| {
                 let s = &states[i];
                 let p = Point { x: s.x, y: s.y };
-                let goal = reachable_goal(&self.shore, &cells[i], p, clearance);
-                let (towards, remaining) = match self.roadmap.leg(&self.shore, p, goal) {
-                    Some(leg) => (leg.towards, leg.length),
-                    None => (goal, (goal.x - p.x).hypot(goal.y - p.y)),
+                let straight = |goal: Point| (goal, (goal.x - p.x).hypot(goal.y - p.y));
+                let (goal, (towards, remaining)) = if self.params.reachable_goals {
+                    let goal = reachable_goal(&self.shore, &cells[i], p, clearance);
+                    let leg = self.roadmap.leg(&self.shore, p, goal);
+                    (goal, leg.map_or(straight(goal), |l| (l.towards, l.length)))
+                } else {
+                    (cells[i].centroid, straight(cells[i].centroid))
                 };
                 let g: &Guidance = guidance[i].borrow_mut();
                 let (wx, wy) = g.desired_velocity(s, (towards.x, towards.y), remaining);
@@ -337,6 +349,49 @@ mod tests {
                 assert!(!got[i].intervened);
             }
         }
+    }
+
+    #[test]
+    fn without_goals_and_filter_it_is_the_plain_guidance_even_at_the_shore() {
+        let region = Region::new(
+            vec![p(0.0, 0.0), p(100.0, 0.0), p(100.0, 100.0), p(0.0, 100.0)],
+            vec![],
+        )
+        .unwrap();
+        let params = SafetyParams {
+            filter: false,
+            reachable_goals: false,
+            ..SafetyParams::default()
+        };
+        let layer = SafetyLayer::new(&region, params).unwrap();
+        let states = vec![State {
+            x: 0.5,
+            y: 3.0,
+            psi: 1.0,
+            vel: Vec3::new(0.3, 0.0, 0.0),
+        }];
+        let fleet = Fleet::new(vec![Vessel {
+            position: p(0.5, 3.0),
+            k: 0.5,
+            beta: 0.001,
+        }])
+        .unwrap();
+        let risk = RiskField::new(
+            0.1,
+            vec![crate::coverage::RiskObject {
+                center: p(2.0, 2.0),
+                alpha: 50.0,
+                sigma: 3.0,
+            }],
+        )
+        .unwrap();
+        let eval = evaluate(&region, &risk, &fleet, &Options::default());
+        let mut safe = vec![Guidance::new(GuidanceGains::default())];
+        let mut plain = safe.clone();
+        let got = layer.commands(0.0, &states, &eval.cells, &mut safe);
+        let c = eval.cells[0].centroid;
+        assert_eq!(got[0].command, plain[0].update(0.0, &states[0], (c.x, c.y)));
+        assert_eq!(got[0].goal, c);
     }
 
     #[test]

@@ -96,6 +96,7 @@ fn lloyd_e_max(config: &Config, tick: &super::Tick) -> f64 {
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct SafetySummary {
     pub filter: bool,
+    pub reachable_goals: bool,
     pub safety_distance: f64,
     pub shore_distance: f64,
     pub hull_radius: f64,
@@ -118,6 +119,7 @@ impl SafetySummary {
         let last = run.ticks.last().expect("a run has a last tick");
         SafetySummary {
             filter: config.safety.filter,
+            reachable_goals: config.safety.reachable_goals,
             safety_distance: config.safety.safety_distance,
             shore_distance: config.safety.shore_distance,
             hull_radius: config.hull_radius,
