@@ -155,20 +155,20 @@ impl Monitor {
                 }
             }
         }
-        self.pairs(&positions);
+        self.pairs(states);
     }
 
     /// After an integration step.
     pub fn step(&mut self, states: &[State], shore: &Shore) {
-        let positions: Vec<Point> = states.iter().map(|s| Point { x: s.x, y: s.y }).collect();
-        for (i, &p) in positions.iter().enumerate() {
+        for (i, s) in states.iter().enumerate() {
+            let p = Point { x: s.x, y: s.y };
             self.travelled[i] += norm2(p - self.last_position[i]).sqrt();
             self.last_position[i] = p;
             if self.last_clearance[i] - self.travelled[i] < self.shore_distance + 0.5 {
                 self.shore_exact(i, p, shore);
             }
         }
-        self.pairs(&positions);
+        self.pairs(states);
     }
 
     fn shore_exact(&mut self, i: usize, p: Point, shore: &Shore) {
@@ -190,11 +190,11 @@ impl Monitor {
         self.near_shore[i] = near;
     }
 
-    fn pairs(&mut self, positions: &[Point]) {
+    fn pairs(&mut self, states: &[State]) {
         let collide2 = (2.0 * self.hull_radius).powi(2);
         let breach2 = self.safety_distance.powi(2);
         for &(i, j) in &self.candidates {
-            let d2 = norm2(positions[i] - positions[j]);
+            let d2 = (states[i].x - states[j].x).powi(2) + (states[i].y - states[j].y).powi(2);
             self.record.min_pair_distance = self.record.min_pair_distance.min(d2.sqrt());
             if d2 < collide2 {
                 if self.colliding.insert((i, j)) {
