@@ -527,8 +527,11 @@ async fn the_dashboard_keeps_up_with_a_thousand_vessels() {
         snapshots >= 3.0,
         "the page took in {snapshots} snapshots in 3 s"
     );
+    // Every snapshot drawn, but for one in flight at each end of the window
+    // (taken in, its frame not yet drawn), which the two counters read at
+    // different moments cannot tell apart.
     assert!(
-        draws >= snapshots.min(10.0),
+        draws >= snapshots.min(10.0) - 2.0,
         "{draws} frames for {snapshots} snapshots"
     );
     screenshot(&client, "thousand").await;
