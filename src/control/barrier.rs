@@ -125,69 +125,91 @@ pub struct Desire {
 /// Filters every vessel's desired velocity; returns the safe velocities in
 /// the same order.
 pub fn filter(barrier: &Barrier, shore: &Shore, fleet: &[Desire]) -> Vec<Point> {
+    filter_with(
+        barrier,
+        shore,
+        fleet,
+        fleet.len() >= crate::coverage::PARALLEL_MIN,
+    )
+}
+
+/// [`filter`], on every core or on this thread.
+fn filter_with(barrier: &Barrier, shore: &Shore, fleet: &[Desire], parallel: bool) -> Vec<Point> {
     let top = fleet.iter().map(|d| d.max_speed).fold(0.0, f64::max);
     let pair_radius = barrier.safety_distance + barrier.reach(2.0 * top);
     let positions: Vec<Point> = fleet.iter().map(|d| d.position).collect();
     let grid = NeighbourGrid::new(&positions, pair_radius);
-    let mut neighbours = Vec::new();
-    let mut shore_points: Vec<ShorePoint> = Vec::new();
-    let mut constraints = Vec::new();
-    (0..fleet.len())
-        .map(|i| {
-            let me = fleet[i];
-            let p = me.position;
-            constraints.clear();
-            grid.within(
-                i,
-                barrier.safety_distance + barrier.reach(2.0 * me.max_speed),
-                &mut neighbours,
-            );
-            for &j in &neighbours {
-                let d = positions[j] - p;
-                let dist = norm2(d).sqrt();
-                // n from j to i; coincident vessels part along x, the lower
-                // index to the west, so that the pair still separates.
-                let n = if dist > 0.0 {
-                    -d / dist
-                } else if i < j {
-                    Point { x: -1.0, y: 0.0 }
+    // Each vessel's problem reads only the positions, so vessels are solved
+    // independently; on every core for large fleets, with the same result.
+    let solve = |i: usize,
+                 (neighbours, shore_points, constraints): &mut (
+        Vec<usize>,
+        Vec<ShorePoint>,
+        Vec<HalfPlane>,
+    )| {
+        let me = fleet[i];
+        let p = me.position;
+        constraints.clear();
+        grid.within(
+            i,
+            barrier.safety_distance + barrier.reach(2.0 * me.max_speed),
+            neighbours,
+        );
+        for &j in neighbours.iter() {
+            let d = positions[j] - p;
+            let dist = norm2(d).sqrt();
+            // n from j to i; coincident vessels part along x, the lower
+            // index to the west, so that the pair still separates.
+            let n = if dist > 0.0 {
+                -d / dist
+            } else if i < j {
+                Point { x: -1.0, y: 0.0 }
+            } else {
+                Point { x: 1.0, y: 0.0 }
+            };
+            let closing = -dot(n, me.actual - fleet[j].actual);
+            let gap = dist - barrier.safety_distance - barrier.lookahead * closing.max(0.0);
+            constraints.push(HalfPlane {
+                a: n,
+                b: -0.5 * barrier.stopping_speed(gap),
+            });
+        }
+        let inside = shore.region().contains(p);
+        shore.near(
+            p,
+            barrier.shore_distance + barrier.reach(me.max_speed),
+            shore_points,
+        );
+        for q in shore_points.iter() {
+            let (n, signed) = if q.distance > 0.0 {
+                let n = (p - q.point) / q.distance;
+                if inside {
+                    (n, q.distance)
                 } else {
-                    Point { x: 1.0, y: 0.0 }
-                };
-                let closing = -dot(n, me.actual - fleet[j].actual);
-                let gap = dist - barrier.safety_distance - barrier.lookahead * closing.max(0.0);
-                constraints.push(HalfPlane {
-                    a: n,
-                    b: -0.5 * barrier.stopping_speed(gap),
-                });
-            }
-            let inside = shore.region().contains(p);
-            shore.near(
-                p,
-                barrier.shore_distance + barrier.reach(me.max_speed),
-                &mut shore_points,
-            );
-            for q in &shore_points {
-                let (n, signed) = if q.distance > 0.0 {
-                    let n = (p - q.point) / q.distance;
-                    if inside {
-                        (n, q.distance)
-                    } else {
-                        (-n, -q.distance)
-                    }
-                } else {
-                    (q.inward, 0.0)
-                };
-                let closing = -dot(n, me.actual);
-                let gap = signed - barrier.shore_distance - barrier.lookahead * closing.max(0.0);
-                constraints.push(HalfPlane {
-                    a: n,
-                    b: -barrier.stopping_speed(gap),
-                });
-            }
-            safe_velocity(me, &mut constraints)
-        })
-        .collect()
+                    (-n, -q.distance)
+                }
+            } else {
+                (q.inward, 0.0)
+            };
+            let closing = -dot(n, me.actual);
+            let gap = signed - barrier.shore_distance - barrier.lookahead * closing.max(0.0);
+            constraints.push(HalfPlane {
+                a: n,
+                b: -barrier.stopping_speed(gap),
+            });
+        }
+        safe_velocity(me, constraints)
+    };
+    if parallel {
+        use rayon::prelude::*;
+        (0..fleet.len())
+            .into_par_iter()
+            .map_init(Default::default, |buffers, i| solve(i, buffers))
+            .collect()
+    } else {
+        let mut buffers = Default::default();
+        (0..fleet.len()).map(|i| solve(i, &mut buffers)).collect()
+    }
 }
 
 /// The nearest safe velocity to the nominal one (see the module doc for
@@ -212,6 +234,52 @@ fn safe_velocity(me: Desire, constraints: &mut [HalfPlane]) -> Point {
 mod tests {
     use super::*;
     use crate::geometry::Region;
+
+    #[test]
+    fn on_every_core_it_is_the_same_bit_for_bit() {
+        let region = Region::new(
+            vec![
+                Point { x: 0.0, y: 0.0 },
+                Point { x: 100.0, y: 0.0 },
+                Point { x: 100.0, y: 100.0 },
+                Point { x: 0.0, y: 100.0 },
+            ],
+            vec![],
+        )
+        .unwrap();
+        let shore = Shore::new(&region);
+        // A dense, tangled fleet: every vessel has many constraints.
+        let fleet: Vec<Desire> = (0..300)
+            .map(|k| {
+                let t = k as f64;
+                Desire {
+                    position: Point {
+                        x: (t * 37.1) % 100.0,
+                        y: (t * 61.7) % 100.0,
+                    },
+                    actual: Point {
+                        x: (t * 0.37).sin(),
+                        y: (t * 0.71).cos(),
+                    },
+                    velocity: Point {
+                        x: (t * 1.3).cos() * 1.5,
+                        y: (t * 0.9).sin() * 1.5,
+                    },
+                    max_speed: 1.5,
+                }
+            })
+            .collect();
+        let barrier = Barrier {
+            safety_distance: 8.0,
+            shore_distance: 4.0,
+            reaction_time: 2.5,
+            braking: 0.5,
+            lookahead: 2.0,
+        };
+        let one = filter_with(&barrier, &shore, &fleet, false);
+        let all = filter_with(&barrier, &shore, &fleet, true);
+        assert_eq!(format!("{one:?}"), format!("{all:?}"));
+    }
 
     fn p(x: f64, y: f64) -> Point {
         Point { x, y }
