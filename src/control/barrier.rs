@@ -237,17 +237,7 @@ mod tests {
 
     #[test]
     fn on_every_core_it_is_the_same_bit_for_bit() {
-        let region = Region::new(
-            vec![
-                Point { x: 0.0, y: 0.0 },
-                Point { x: 100.0, y: 0.0 },
-                Point { x: 100.0, y: 100.0 },
-                Point { x: 0.0, y: 100.0 },
-            ],
-            vec![],
-        )
-        .unwrap();
-        let shore = Shore::new(&region);
+        let shore = Shore::new(&crate::geometry::region::fixtures::square(false));
         // A dense, tangled fleet: every vessel has many constraints.
         let fleet: Vec<Desire> = (0..300)
             .map(|k| {

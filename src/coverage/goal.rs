@@ -146,16 +146,7 @@ mod tests {
     fn a_centroid_on_an_island_moves_to_the_shore_off_it() {
         // One vessel south of a square island, and a risk object on the
         // island that pulls the centroid onto it.
-        let region = Region::new(
-            vec![p(0.0, 0.0), p(100.0, 0.0), p(100.0, 100.0), p(0.0, 100.0)],
-            vec![vec![
-                p(40.0, 40.0),
-                p(60.0, 40.0),
-                p(60.0, 60.0),
-                p(40.0, 60.0),
-            ]],
-        )
-        .unwrap();
+        let region = crate::geometry::region::fixtures::square(true);
         let shore = Shore::new(&region);
         // A weak decay, so that the vessel barely pulls the centroid south.
         let fleet = Fleet::new(vec![Vessel {

@@ -483,3 +483,30 @@ mod tests {
         assert!((c.x - 1.6).abs() < 1e-12 && (c.y - 1.0).abs() < 1e-12);
     }
 }
+
+/// Regions shared by the core's unit tests.
+#[cfg(test)]
+pub(crate) mod fixtures {
+    use super::{Point, Region};
+
+    /// The 100 m square from the origin, with a 20 m square island in its
+    /// middle when `island`.
+    pub fn square(island: bool) -> Region {
+        let p = |x, y| Point { x, y };
+        let holes = if island {
+            vec![vec![
+                p(40.0, 40.0),
+                p(60.0, 40.0),
+                p(60.0, 60.0),
+                p(40.0, 60.0),
+            ]]
+        } else {
+            vec![]
+        };
+        Region::new(
+            vec![p(0.0, 0.0), p(100.0, 0.0), p(100.0, 100.0), p(0.0, 100.0)],
+            holes,
+        )
+        .expect("a valid region")
+    }
+}

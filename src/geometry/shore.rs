@@ -193,16 +193,7 @@ mod tests {
     }
 
     fn square_with_island() -> Region {
-        Region::new(
-            vec![p(0.0, 0.0), p(100.0, 0.0), p(100.0, 100.0), p(0.0, 100.0)],
-            vec![vec![
-                p(40.0, 40.0),
-                p(60.0, 40.0),
-                p(60.0, 60.0),
-                p(40.0, 60.0),
-            ]],
-        )
-        .unwrap()
+        crate::geometry::region::fixtures::square(true)
     }
 
     #[test]

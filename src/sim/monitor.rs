@@ -218,7 +218,6 @@ impl Monitor {
 mod tests {
     use super::*;
     use crate::control::Vec3;
-    use crate::geometry::Region;
 
     fn at(x: f64, y: f64) -> State {
         State {
@@ -231,18 +230,7 @@ mod tests {
 
     #[test]
     fn counts_episodes_not_steps() {
-        let shore = Shore::new(
-            &Region::new(
-                vec![
-                    Point { x: 0.0, y: 0.0 },
-                    Point { x: 100.0, y: 0.0 },
-                    Point { x: 100.0, y: 100.0 },
-                    Point { x: 0.0, y: 100.0 },
-                ],
-                vec![],
-            )
-            .unwrap(),
-        );
+        let shore = Shore::new(&crate::geometry::region::fixtures::square(false));
         let mut m = Monitor::new(2, 2.0, 8.0, 4.0, 0.1);
         let mut s = vec![at(50.0, 50.0), at(58.0, 50.0)];
         m.tick(&s, &shore, [false, true].into_iter());
