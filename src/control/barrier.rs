@@ -200,16 +200,7 @@ fn filter_with(barrier: &Barrier, shore: &Shore, fleet: &[Desire], parallel: boo
         }
         safe_velocity(me, constraints)
     };
-    if parallel {
-        use rayon::prelude::*;
-        (0..fleet.len())
-            .into_par_iter()
-            .map_init(Default::default, |buffers, i| solve(i, buffers))
-            .collect()
-    } else {
-        let mut buffers = Default::default();
-        (0..fleet.len()).map(|i| solve(i, &mut buffers)).collect()
-    }
+    crate::coverage::map_indexed(fleet.len(), parallel, solve)
 }
 
 /// The nearest safe velocity to the nominal one (see the module doc for

@@ -34,6 +34,28 @@ pub use partition::CellGeometry;
 /// pool costs more than it saves.
 pub const PARALLEL_MIN: usize = 64;
 
+/// `f(0) … f(n − 1)` in order, on every core (rayon) when `parallel`, else on
+/// this thread. Each worker gets its own scratch buffer (`B::default()`), so
+/// `f` allocates nothing per item; the result is the same either way as
+/// long as `f` depends only on its index.
+pub fn map_indexed<T, B, F>(n: usize, parallel: bool, f: F) -> Vec<T>
+where
+    T: Send,
+    B: Default,
+    F: Fn(usize, &mut B) -> T + Sync,
+{
+    if parallel {
+        use rayon::prelude::*;
+        (0..n)
+            .into_par_iter()
+            .map_init(B::default, |buffer, i| f(i, buffer))
+            .collect()
+    } else {
+        let mut buffer = B::default();
+        (0..n).map(|i| f(i, &mut buffer)).collect()
+    }
+}
+
 /// Why inputs to the engine were rejected. Messages name the offending field
 /// with the path a scenario document uses (`vessels[3].k`).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -207,16 +207,11 @@ pub fn power_cells_with(region: &Region, fleet: &Fleet, parallel: bool) -> Vec<C
         cell.translate(p);
         clip_to_region(cell, region)
     };
-    if parallel && vessels.len() >= super::PARALLEL_MIN {
-        use rayon::prelude::*;
-        (0..vessels.len())
-            .into_par_iter()
-            .map_init(Vec::new, |near, i| cell_of(i, near))
-            .collect()
-    } else {
-        let mut near = Vec::new();
-        (0..vessels.len()).map(|i| cell_of(i, &mut near)).collect()
-    }
+    super::map_indexed(
+        vessels.len(),
+        parallel && vessels.len() >= super::PARALLEL_MIN,
+        cell_of,
+    )
 }
 
 /// Intersects a convex cell (world coordinates) with Q.
