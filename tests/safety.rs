@@ -1,7 +1,7 @@
 //! Safe motion among islands (docs/safety.md): the harbour with 8 and 30
 //! vessels from random starts, a few seeds, each with the safety filter on
 //! and off. With the filter: no collision, no incursion, the vessels keep
-//! (nearly) the safety distance and the shore distance, and H ends within
+//! the safety distance and the shore distance, and H ends within
 //! 2 % of the same fleet's without it. Without the filter the same fleets
 //! come much closer — so these checks can fail. The full 50-seed study is
 //! `cargo run --release -- sim safety-study` (not run here: minutes).
@@ -12,7 +12,10 @@ use seacover::sim::study::{StudyRun, run_study};
 #[test]
 fn the_filter_keeps_harbour_fleets_apart_and_off_the_shore_at_little_cost_in_h() {
     let p = SafetyParams::default();
-    // Seeds 1, 2 and 4; in seed 4 two unfiltered hulls pass 4.4 m apart.
+    // Seeds 1, 2 and 4; in seed 4 two unfiltered hulls pass 4.4 m apart, and
+    // in seed 2 two of the 30 start 9.6 m apart, bows towards each other
+    // (the filter without its surge clamp let them to 7.51 m).
+    // 1 cm of slack: the filter holds pairs at exactly D.
     let runs = run_study(&[8, 30], &[1, 2, 4], 200.0, 2, |_| {}).expect("runs");
     assert_eq!(runs.len(), 12);
     let pair = |on: bool| runs.iter().filter(move |r: &&StudyRun| r.filter == on);
@@ -20,12 +23,12 @@ fn the_filter_keeps_harbour_fleets_apart_and_off_the_shore_at_little_cost_in_h()
         let what = format!("{} vessels, seed {}", r.vessels, r.seed);
         assert_eq!((r.collisions, r.incursions), (0, 0), "{what}");
         assert!(
-            r.min_pair_distance >= 0.9 * p.safety_distance,
+            r.min_pair_distance >= p.safety_distance - 0.01,
             "{what}: {}",
             r.min_pair_distance
         );
         assert!(
-            r.min_shore_clearance >= 0.9 * p.shore_distance,
+            r.min_shore_clearance >= p.shore_distance - 0.01,
             "{what}: {}",
             r.min_shore_clearance
         );

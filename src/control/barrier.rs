@@ -40,8 +40,12 @@
 //! h̃ = h − T max(0, s), s = −n · (w_i − w_j) the actual closing speed (own
 //! velocity alone for the shore). A pair closing fast is filtered as if it
 //! were already nearer, so braking starts early enough; a pair opening is
-//! not relaxed. h̃ is continuous in the state, so the filtered command does
-//! not chatter from tick to tick.
+//! not relaxed. T is the lookahead plus the time the hull needs to turn its
+//! thrust axis (ahead or astern) onto n at its yaw-rate limit, arccos|n·bow|
+//! / r_max: a hull drifting sideways towards the shore must first turn
+//! before any thrust slows that drift, so its gap is predicted further
+//! ahead. h̃ is continuous in the state, so the filtered command does not
+//! chatter from tick to tick.
 //!
 //! ## Decentralised, reciprocal
 //! Each vessel solves its own problem with the positions it sees and takes
@@ -64,10 +68,27 @@
 //! problem is solved again; the result is then capped at the vessel's
 //! speed limit (scaling towards 0 keeps every "close no gap" constraint).
 //!
+//! ## The hull moves along its bow
+//! The hull cannot take the filtered velocity at once: its thrust is along
+//! the bow, and while it turns towards w_i it moves at its surge speed along
+//! the bow plus whatever sway it has. The tracking sets the surge command
+//! to the projection of w_i on the bow (or lets the hull coast while the bow
+//! points the wrong way), which may close a gap w_i itself would not: two
+//! hulls at rest, bows towards each other, asked to pass sideways, would
+//! surge straight at each other. So the filter also returns, per vessel, the
+//! interval of surge speeds u for which u·bow + sway meets every one of its
+//! constraints ([`Safe::surge`]), and the caller clamps the surge command
+//! into it: an underactuated hull is only ever asked for the part of the
+//! safe motion its thrust can give now. The interval always holds 0 when the
+//! sway meets the constraints; when it does not, the constraints are
+//! relaxed as above.
+//!
 //! ## Cost
 //! Only neighbours and shore edges close enough for their constraint to
-//! bind at the vessel's top speed v are considered: α(h) ≥ 2v (pairs) or
-//! ≥ v (shore) beyond h = 2vτ + 2v²/a, resp. vτ + v²/(2a). Neighbours come
+//! bind at the vessel's top speed v are considered ([`Barrier::horizon`]):
+//! the reach 2vτ + 2v²/a (pairs, closing at most at 2v), resp. vτ + v²/(2a)
+//! (shore), plus the longest prediction, (T + π/(2 r_max)) times that
+//! closing speed. Neighbours come
 //! from a bucket grid and shore edges from an R-tree, so the fleet costs
 //! O(n k) for k neighbours per vessel.
 
@@ -108,6 +129,29 @@ impl Barrier {
     pub fn reach(&self, speed: f64) -> f64 {
         speed * self.reaction_time + speed * speed / (2.0 * self.braking)
     }
+
+    /// The distance beyond which no constraint of a gap closing at most at
+    /// `speed` can bind, for a hull turning at `turn_rate`: the reach plus
+    /// the longest prediction (lookahead and a right-angle turn).
+    pub fn horizon(&self, speed: f64, turn_rate: f64) -> f64 {
+        let turn = if turn_rate > 0.0 {
+            std::f64::consts::FRAC_PI_2 / turn_rate
+        } else {
+            0.0
+        };
+        self.reach(speed) + (self.lookahead + turn) * speed
+    }
+
+    /// How far ahead a gap along `n` is predicted for a hull with bow `bow`:
+    /// the lookahead plus the time to turn its thrust axis (ahead or
+    /// astern) onto n.
+    fn prediction(&self, n: Point, me: &Desire) -> f64 {
+        if me.turn_rate > 0.0 {
+            self.lookahead + dot(n, me.bow).abs().min(1.0).acos() / me.turn_rate
+        } else {
+            self.lookahead
+        }
+    }
 }
 
 /// One vessel's input to the filter.
@@ -120,11 +164,26 @@ pub struct Desire {
     pub velocity: Point,
     /// The vessel's speed limit [m/s].
     pub max_speed: f64,
+    /// Its bow: the unit vector of its heading.
+    pub bow: Point,
+    /// The fastest it turns [rad/s] (the guidance's yaw-rate limit).
+    pub turn_rate: f64,
 }
 
-/// Filters every vessel's desired velocity; returns the safe velocities in
-/// the same order.
-pub fn filter(barrier: &Barrier, shore: &Shore, fleet: &[Desire]) -> Vec<Point> {
+/// One vessel's output of the filter.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Safe {
+    /// The safe desired ground velocity, nearest the nominal one.
+    pub velocity: Point,
+    /// The surge speeds [m/s] that, along the bow and with the vessel's
+    /// present sway, keep every constraint: `lo ≤ u ≤ hi`, within ± the
+    /// speed limit.
+    pub surge: (f64, f64),
+}
+
+/// Filters every vessel's desired velocity; returns the safe velocities and
+/// surge intervals in the same order.
+pub fn filter(barrier: &Barrier, shore: &Shore, fleet: &[Desire]) -> Vec<Safe> {
     filter_with(
         barrier,
         shore,
@@ -134,9 +193,13 @@ pub fn filter(barrier: &Barrier, shore: &Shore, fleet: &[Desire]) -> Vec<Point> 
 }
 
 /// [`filter`], on every core or on this thread.
-fn filter_with(barrier: &Barrier, shore: &Shore, fleet: &[Desire], parallel: bool) -> Vec<Point> {
+fn filter_with(barrier: &Barrier, shore: &Shore, fleet: &[Desire], parallel: bool) -> Vec<Safe> {
     let top = fleet.iter().map(|d| d.max_speed).fold(0.0, f64::max);
-    let pair_radius = barrier.safety_distance + barrier.reach(2.0 * top);
+    let slowest_turn = fleet
+        .iter()
+        .map(|d| d.turn_rate)
+        .fold(f64::INFINITY, f64::min);
+    let pair_radius = barrier.safety_distance + barrier.horizon(2.0 * top, slowest_turn);
     let positions: Vec<Point> = fleet.iter().map(|d| d.position).collect();
     let grid = NeighbourGrid::new(&positions, pair_radius);
     // Each vessel's problem reads only the positions, so vessels are solved
@@ -152,7 +215,7 @@ fn filter_with(barrier: &Barrier, shore: &Shore, fleet: &[Desire], parallel: boo
         constraints.clear();
         grid.within(
             i,
-            barrier.safety_distance + barrier.reach(2.0 * me.max_speed),
+            barrier.safety_distance + barrier.horizon(2.0 * me.max_speed, me.turn_rate),
             neighbours,
         );
         for &j in neighbours.iter() {
@@ -168,7 +231,8 @@ fn filter_with(barrier: &Barrier, shore: &Shore, fleet: &[Desire], parallel: boo
                 Point { x: 1.0, y: 0.0 }
             };
             let closing = -dot(n, me.actual - fleet[j].actual);
-            let gap = dist - barrier.safety_distance - barrier.lookahead * closing.max(0.0);
+            let gap =
+                dist - barrier.safety_distance - barrier.prediction(n, &me) * closing.max(0.0);
             constraints.push(HalfPlane {
                 a: n,
                 b: -0.5 * barrier.stopping_speed(gap),
@@ -177,7 +241,7 @@ fn filter_with(barrier: &Barrier, shore: &Shore, fleet: &[Desire], parallel: boo
         let inside = shore.region().contains(p);
         shore.near(
             p,
-            barrier.shore_distance + barrier.reach(me.max_speed),
+            barrier.shore_distance + barrier.horizon(me.max_speed, me.turn_rate),
             shore_points,
         );
         for q in shore_points.iter() {
@@ -192,13 +256,18 @@ fn filter_with(barrier: &Barrier, shore: &Shore, fleet: &[Desire], parallel: boo
                 (q.inward, 0.0)
             };
             let closing = -dot(n, me.actual);
-            let gap = signed - barrier.shore_distance - barrier.lookahead * closing.max(0.0);
+            let gap =
+                signed - barrier.shore_distance - barrier.prediction(n, &me) * closing.max(0.0);
             constraints.push(HalfPlane {
                 a: n,
                 b: -barrier.stopping_speed(gap),
             });
         }
-        safe_velocity(me, constraints)
+        let velocity = safe_velocity(me, constraints);
+        Safe {
+            velocity,
+            surge: surge_interval(me, constraints),
+        }
     };
     crate::coverage::map_indexed(fleet.len(), parallel, solve)
 }
@@ -219,6 +288,51 @@ fn safe_velocity(me: Desire, constraints: &mut [HalfPlane]) -> Point {
     } else {
         w
     }
+}
+
+/// The surge speeds that keep every constraint, moving along the bow with
+/// the present sway (see the module doc).
+fn surge_interval(me: Desire, constraints: &[HalfPlane]) -> (f64, f64) {
+    let along = dot(me.actual, me.bow);
+    let sway = me.actual - me.bow * along;
+    // Constraint k as c_k u ≥ r_k: c_k = a_k·bow, r_k = b_k − a_k·sway.
+    let rows = || {
+        constraints
+            .iter()
+            .map(|h| (dot(h.a, me.bow), h.b - dot(h.a, sway)))
+    };
+    // Only surges the hull can be asked for count: a bow nearly across a
+    // constraint would otherwise demand any speed at all.
+    let top = me.max_speed;
+    let (mut lo, mut hi) = (-top, top);
+    for (c, r) in rows() {
+        if c > 1e-9 {
+            lo = lo.max(r / c);
+        } else if c < -1e-9 {
+            hi = hi.min(r / c);
+        }
+    }
+    if lo <= hi {
+        return (lo, hi);
+    }
+    // No surge keeps them all: the one that violates the worst of them
+    // least. The worst violation max_k (r_k − c_k u) is convex in u, so
+    // bisect on the slope of the constraint that attains it.
+    let (mut left, mut right) = (-top, top);
+    for _ in 0..60 {
+        let u = 0.5 * (left + right);
+        let worst = rows().fold((f64::NEG_INFINITY, 0.0), |w, (c, r)| {
+            let v = r - c * u;
+            if v > w.0 { (v, c) } else { w }
+        });
+        if worst.1 > 0.0 {
+            left = u;
+        } else {
+            right = u;
+        }
+    }
+    let u = 0.5 * (left + right);
+    (u, u)
 }
 
 #[cfg(test)]
@@ -247,6 +361,11 @@ mod tests {
                         y: (t * 0.9).sin() * 1.5,
                     },
                     max_speed: 1.5,
+                    bow: Point {
+                        x: (t * 0.3).cos(),
+                        y: (t * 0.3).sin(),
+                    },
+                    turn_rate: 1.0,
                 }
             })
             .collect();
@@ -266,6 +385,10 @@ mod tests {
         Point { x, y }
     }
 
+    fn velocities(b: &Barrier, shore: &Shore, fleet: &[Desire]) -> Vec<Point> {
+        filter(b, shore, fleet).iter().map(|s| s.velocity).collect()
+    }
+
     fn barrier() -> Barrier {
         Barrier {
             safety_distance: 8.0,
@@ -283,6 +406,8 @@ mod tests {
             actual: p(0.0, 0.0),
             velocity,
             max_speed: 2.0,
+            bow: p(1.0, 0.0),
+            turn_rate: 1.0,
         }
     }
 
@@ -329,7 +454,7 @@ mod tests {
             at_rest(p(0.0, 0.0), p(2.0, 0.0)),
             at_rest(p(100.0, 0.0), p(-2.0, 0.0)),
         ];
-        let w = filter(&barrier(), &open_water(), &fleet);
+        let w = velocities(&barrier(), &open_water(), &fleet);
         assert_eq!(w, vec![p(2.0, 0.0), p(-2.0, 0.0)]);
     }
 
@@ -340,7 +465,7 @@ mod tests {
             at_rest(p(0.0, 0.0), p(2.0, 0.5)),
             at_rest(p(12.0, 0.0), p(-2.0, 0.0)),
         ];
-        let w = filter(&b, &open_water(), &fleet);
+        let w = velocities(&b, &open_water(), &fleet);
         let half = 0.5 * b.stopping_speed(4.0);
         assert!((w[0].x - half).abs() < 1e-12 && w[0].y == 0.5, "{:?}", w[0]);
         assert!((w[1].x + half).abs() < 1e-12 && w[1].y == 0.0);
@@ -353,7 +478,7 @@ mod tests {
             at_rest(p(0.0, 0.0), p(0.0, 0.0)),
             at_rest(p(6.0, 0.0), p(0.0, 0.0)),
         ];
-        let w = filter(&b, &open_water(), &fleet);
+        let w = velocities(&b, &open_water(), &fleet);
         assert!((w[0].x + 0.5 * 2.0 / 2.5).abs() < 1e-12, "{:?}", w[0]);
         assert!((w[1].x - 0.5 * 2.0 / 2.5).abs() < 1e-12);
     }
@@ -363,7 +488,7 @@ mod tests {
         let b = barrier();
         let shore = square();
         let fleet = [at_rest(p(50.0, 6.0), p(1.5, -1.5))];
-        let w = filter(&b, &shore, &fleet);
+        let w = velocities(&b, &shore, &fleet);
         assert!((w[0].y + b.stopping_speed(2.0)).abs() < 1e-12, "{:?}", w[0]);
         assert_eq!(w[0].x, 1.5);
     }
@@ -373,7 +498,7 @@ mod tests {
         let b = barrier();
         let shore = square();
         let at = |actual| {
-            filter(
+            velocities(
                 &b,
                 &shore,
                 &[Desire {
@@ -381,6 +506,8 @@ mod tests {
                     position: p(50.0, 10.0),
                     velocity: p(0.0, -2.0),
                     max_speed: 2.0,
+                    bow: p(0.0, -1.0),
+                    turn_rate: 1.0,
                 }],
             )[0]
         };
@@ -400,7 +527,54 @@ mod tests {
             at_rest(p(0.0, 0.0), p(1.0, 0.3)),
             at_rest(p(5.0, 0.0), p(0.0, 0.0)),
         ];
-        let w = filter(&b, &open_water(), &fleet);
+        let w = velocities(&b, &open_water(), &fleet);
         assert_eq!(w[1], p(0.0, 0.3));
+    }
+
+    #[test]
+    fn hulls_bow_to_bow_asked_to_pass_sideways_may_not_surge_at_each_other() {
+        let b = barrier();
+        // 10 m apart, bows towards each other, both asked to go north: the
+        // safe velocities are the nominal ones (nothing closes), but surging
+        // along the bows would close the gap at twice the surge.
+        let mut fleet = [
+            at_rest(p(0.0, 0.0), p(0.0, 2.0)),
+            at_rest(p(10.0, 0.0), p(0.0, 2.0)),
+        ];
+        fleet[1].bow = p(-1.0, 0.0);
+        let safe = filter(&b, &open_water(), &fleet);
+        assert_eq!(safe[0].velocity, p(0.0, 2.0));
+        let half = 0.5 * b.stopping_speed(2.0);
+        for s in &safe {
+            assert!((s.surge.1 - half).abs() < 1e-12, "{s:?}");
+            assert_eq!(s.surge.0, -2.0);
+        }
+    }
+
+    #[test]
+    fn the_surge_interval_counts_the_sway() {
+        let b = barrier();
+        let shore = square();
+        // 6 m off the south shore, bow east, drifting south at 0.5 m/s of
+        // sway: no surge along the bow can undo the drift, so the
+        // constraint is relaxed to closing no faster than the drift; a bow
+        // pointing away from the shore must surge off it.
+        let mut me = Desire {
+            position: p(50.0, 6.0),
+            actual: p(0.0, -0.5),
+            velocity: p(1.0, 0.0),
+            max_speed: 2.0,
+            bow: p(1.0, 0.0),
+            turn_rate: 1.0,
+        };
+        let s = filter(&b, &shore, &[me])[0];
+        assert_eq!(s.surge, (-2.0, 2.0));
+        me.bow = p(0.0, 1.0);
+        me.actual = p(0.0, -0.5);
+        let s = filter(&b, &shore, &[me])[0];
+        // The hull is closing at 0.5 m/s along its (reversed) bow: the gap
+        // is filtered as 6 − 4 − 2·0.5 = 1 m.
+        assert!((s.surge.0 + b.stopping_speed(1.0)).abs() < 1e-12, "{s:?}");
+        assert_eq!(s.surge.1, 2.0);
     }
 }

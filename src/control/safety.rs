@@ -19,7 +19,10 @@
 //!    vessels (≥ `safety_distance`) and to the shore (≥ `shore_distance`)
 //!    closing no faster than the hull can still stop.
 //! 5. **Tracking**: the `course` guidance turns that ground velocity into
-//!    (u_d, r_d) for the underactuated hull ([`Guidance::track`]).
+//!    (u_d, r_d) for the underactuated hull ([`Guidance::track`]); with the
+//!    filter on, u_d is clamped into the surges that keep every gap along
+//!    the bow with the present sway (the hull's thrust is along its bow
+//!    while it turns; see [`barrier`](super::barrier)).
 //!
 //! With `reachable_goals` off, steps 1–2 are skipped and each vessel steers
 //! straight at its centroid: with the filter off too, that is exactly the
@@ -51,12 +54,12 @@
 //!   is served (and debug builds assert).
 //! - Cost: O(n k) for k neighbours within reach, plus, for vessels whose goal
 //!   is out of sight, O(W) visibility tests against the route map's W
-//!   waypoints; at 1000 vessels about 1.7 ms (`cargo bench --bench sim --
+//!   waypoints; at 1000 vessels about 3.2 ms (`cargo bench --bench sim --
 //!   safety`), beside 5.7 ms for the evaluation.
 
 use std::borrow::BorrowMut;
 
-use super::barrier::{Barrier, Desire, filter};
+use super::barrier::{Barrier, Desire, Safe, filter};
 use super::guidance::{Command, Guidance, GuidanceMode};
 use super::model::State;
 use crate::coverage::goal::reachable_goal;
@@ -253,11 +256,22 @@ impl SafetyLayer {
                     },
                     velocity: plans[i].3,
                     max_speed: guidance[i].borrow_mut().gains.max_speed,
+                    turn_rate: guidance[i].borrow_mut().gains.max_yaw_rate,
+                    bow: Point {
+                        x: states[i].psi.cos(),
+                        y: states[i].psi.sin(),
+                    },
                 })
                 .collect();
             filter(&self.params.barrier(), &self.shore, &desires)
         } else {
-            plans.iter().map(|p| p.3).collect()
+            plans
+                .iter()
+                .map(|p| Safe {
+                    velocity: p.3,
+                    surge: (f64::NEG_INFINITY, f64::INFINITY),
+                })
+                .collect()
         };
         (0..n)
             .map(|i| {
@@ -275,15 +289,23 @@ impl SafetyLayer {
                         intervened: false,
                     };
                 }
-                let w = filtered[i];
-                let command = g.track(t, &states[i], to, remaining, (w.x, w.y));
+                let Safe { velocity: w, surge } = filtered[i];
+                let mut command = g.track(t, &states[i], to, remaining, (w.x, w.y));
+                // The thrust is along the bow: ask only for the surge that
+                // keeps every gap while the hull turns (see `barrier`).
+                let u_d = command.u_d.clamp(surge.0, surge.1);
+                let clamped = (u_d - command.u_d).abs() > self.params.tolerance;
+                if u_d != command.u_d {
+                    command.u_d = u_d;
+                    command.u_d_dot = 0.0;
+                }
                 SafeCommand {
                     command,
                     goal,
                     towards,
                     nominal,
                     filtered: w,
-                    intervened: norm2(w - nominal).sqrt() > self.params.tolerance,
+                    intervened: clamped || norm2(w - nominal).sqrt() > self.params.tolerance,
                 }
             })
             .collect()
