@@ -317,11 +317,13 @@ fn surge_interval(me: Desire, constraints: &[HalfPlane]) -> (f64, f64) {
     }
     // No surge keeps them all: the one that violates the worst of them
     // least. The worst violation max_k (r_k − c_k u) is convex in u, so
-    // bisect on the slope of the constraint that attains it.
+    // bisect on the slope of the constraint that attains it (40 halvings of
+    // the speed range: far below a speed the hull can resolve).
+    let rows: Vec<(f64, f64)> = rows().collect();
     let (mut left, mut right) = (-top, top);
-    for _ in 0..60 {
+    for _ in 0..40 {
         let u = 0.5 * (left + right);
-        let worst = rows().fold((f64::NEG_INFINITY, 0.0), |w, (c, r)| {
+        let worst = rows.iter().fold((f64::NEG_INFINITY, 0.0), |w, &(c, r)| {
             let v = r - c * u;
             if v > w.0 { (v, c) } else { w }
         });

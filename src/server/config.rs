@@ -261,6 +261,21 @@ mod tests {
     }
 
     #[test]
+    fn the_load_benchmark_mission_is_the_fleet_1000_scenario() {
+        let s = Settings::parse(include_str!("../../examples/fleet-1000.toml")).unwrap();
+        let doc = s.mission.document();
+        let scenario: crate::protocol::ScenarioDocument =
+            serde_json::from_str(include_str!("../../examples/fleet-1000.json")).unwrap();
+        assert_eq!(Some(doc.region), scenario.region);
+        // The mission names its objects; the scenario leaves them unnamed.
+        let mut risk = doc.risk;
+        for o in &mut risk.objects {
+            o.id = None;
+        }
+        assert_eq!(Some(risk), scenario.risk);
+    }
+
+    #[test]
     fn bad_files_name_the_key() {
         for (text, needle) in [
             ("tick_hz = 0", "tick_hz"),
