@@ -317,11 +317,12 @@ fn surge_interval(me: Desire, constraints: &[HalfPlane]) -> (f64, f64) {
     }
     // No surge keeps them all: the one that violates the worst of them
     // least. The worst violation max_k (r_k − c_k u) is convex in u, so
-    // bisect on the slope of the constraint that attains it (40 halvings of
-    // the speed range: far below a speed the hull can resolve).
+    // bisect on the slope of the constraint that attains it (60 halvings:
+    // to the last bit of the speed, so the result does not depend on where
+    // the bisection stopped).
     let rows: Vec<(f64, f64)> = rows().collect();
     let (mut left, mut right) = (-top, top);
-    for _ in 0..40 {
+    for _ in 0..60 {
         let u = 0.5 * (left + right);
         let worst = rows.iter().fold((f64::NEG_INFINITY, 0.0), |w, &(c, r)| {
             let v = r - c * u;
