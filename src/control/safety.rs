@@ -54,8 +54,8 @@
 //!   is served (and debug builds assert).
 //! - Cost: O(n k) for k neighbours within reach, plus, for vessels whose goal
 //!   is out of sight, O(W) visibility tests against the route map's W
-//!   waypoints; at 1000 vessels about 3.2 ms (`cargo bench --bench sim --
-//!   safety`), beside 5.7 ms for the evaluation.
+//!   waypoints; at 1000 vessels about a quarter of the evaluation's time
+//!   (`cargo bench --bench sim -- safety` against `--bench evaluate`).
 
 use std::borrow::BorrowMut;
 
