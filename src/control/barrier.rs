@@ -134,23 +134,26 @@ impl Barrier {
     /// `speed` can bind, for a hull turning at `turn_rate`: the reach plus
     /// the longest prediction (lookahead and a right-angle turn).
     pub fn horizon(&self, speed: f64, turn_rate: f64) -> f64 {
-        let turn = if turn_rate > 0.0 {
-            std::f64::consts::FRAC_PI_2 / turn_rate
-        } else {
-            0.0
-        };
-        self.reach(speed) + (self.lookahead + turn) * speed
+        let longest = self.lookahead + turn_time(std::f64::consts::FRAC_PI_2, turn_rate);
+        self.reach(speed) + longest * speed
     }
 
     /// How far ahead a gap along `n` is predicted for a hull with bow `bow`:
     /// the lookahead plus the time to turn its thrust axis (ahead or
-    /// astern) onto n.
+    /// astern) onto n — at most a right angle, which [`Barrier::horizon`]
+    /// counts.
     fn prediction(&self, n: Point, me: &Desire) -> f64 {
-        if me.turn_rate > 0.0 {
-            self.lookahead + dot(n, me.bow).abs().min(1.0).acos() / me.turn_rate
-        } else {
-            self.lookahead
-        }
+        self.lookahead + turn_time(dot(n, me.bow).abs().min(1.0).acos(), me.turn_rate)
+    }
+}
+
+/// Seconds to turn `angle` radians at `turn_rate` (none when the rate is not
+/// positive: no turn is modelled).
+fn turn_time(angle: f64, turn_rate: f64) -> f64 {
+    if turn_rate > 0.0 {
+        angle / turn_rate
+    } else {
+        0.0
     }
 }
 
@@ -415,13 +418,7 @@ mod tests {
     }
 
     fn square() -> Shore {
-        Shore::new(
-            &Region::new(
-                vec![p(0.0, 0.0), p(100.0, 0.0), p(100.0, 100.0), p(0.0, 100.0)],
-                vec![],
-            )
-            .unwrap(),
-        )
+        Shore::new(&crate::geometry::region::fixtures::square(false))
     }
 
     fn open_water() -> Shore {

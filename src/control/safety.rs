@@ -245,22 +245,25 @@ impl SafetyLayer {
             .collect();
         let filtered = if self.params.filter {
             let desires: Vec<Desire> = (0..n)
-                .map(|i| Desire {
-                    position: Point {
-                        x: states[i].x,
-                        y: states[i].y,
-                    },
-                    actual: {
-                        let (vx, vy) = states[i].ground_velocity();
-                        Point { x: vx, y: vy }
-                    },
-                    velocity: plans[i].3,
-                    max_speed: guidance[i].borrow_mut().gains.max_speed,
-                    turn_rate: guidance[i].borrow_mut().gains.max_yaw_rate,
-                    bow: Point {
-                        x: states[i].psi.cos(),
-                        y: states[i].psi.sin(),
-                    },
+                .map(|i| {
+                    let gains = guidance[i].borrow_mut().gains;
+                    Desire {
+                        position: Point {
+                            x: states[i].x,
+                            y: states[i].y,
+                        },
+                        actual: {
+                            let (vx, vy) = states[i].ground_velocity();
+                            Point { x: vx, y: vy }
+                        },
+                        velocity: plans[i].3,
+                        max_speed: gains.max_speed,
+                        turn_rate: gains.max_yaw_rate,
+                        bow: Point {
+                            x: states[i].psi.cos(),
+                            y: states[i].psi.sin(),
+                        },
+                    }
                 })
                 .collect();
             filter(&self.params.barrier(), &self.shore, &desires)
@@ -325,11 +328,7 @@ mod tests {
 
     #[test]
     fn in_open_water_far_from_everything_it_is_exactly_the_plain_guidance() {
-        let region = Region::new(
-            vec![p(0.0, 0.0), p(100.0, 0.0), p(100.0, 100.0), p(0.0, 100.0)],
-            vec![],
-        )
-        .unwrap();
+        let region = crate::geometry::region::fixtures::square(false);
         let layer = SafetyLayer::new(&region, SafetyParams::default()).unwrap();
         let states: Vec<State> = [(20.0, 30.0, 0.3), (70.0, 65.0, -2.0), (40.0, 80.0, 1.0)]
             .iter()
@@ -375,11 +374,7 @@ mod tests {
 
     #[test]
     fn without_goals_and_filter_it_is_the_plain_guidance_even_at_the_shore() {
-        let region = Region::new(
-            vec![p(0.0, 0.0), p(100.0, 0.0), p(100.0, 100.0), p(0.0, 100.0)],
-            vec![],
-        )
-        .unwrap();
+        let region = crate::geometry::region::fixtures::square(false);
         let params = SafetyParams {
             filter: false,
             reachable_goals: false,

@@ -226,11 +226,7 @@ mod tests {
 
     #[test]
     fn a_reachable_centroid_is_kept_exactly() {
-        let region = Region::new(
-            vec![p(0.0, 0.0), p(100.0, 0.0), p(100.0, 100.0), p(0.0, 100.0)],
-            vec![],
-        )
-        .unwrap();
+        let region = crate::geometry::region::fixtures::square(false);
         let shore = Shore::new(&region);
         let fleet = Fleet::new(vec![vessel(30.0, 30.0), vessel(70.0, 60.0)]).unwrap();
         let eval = evaluate(
