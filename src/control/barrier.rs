@@ -197,32 +197,86 @@ pub fn filter(barrier: &Barrier, shore: &Shore, fleet: &[Desire]) -> Vec<Safe> {
 
 /// [`filter`], on every core or on this thread.
 fn filter_with(barrier: &Barrier, shore: &Shore, fleet: &[Desire], parallel: bool) -> Vec<Safe> {
-    let top = fleet.iter().map(|d| d.max_speed).fold(0.0, f64::max);
-    let slowest_turn = fleet
-        .iter()
-        .map(|d| d.turn_rate)
-        .fold(f64::INFINITY, f64::min);
-    let pair_radius = barrier.safety_distance + barrier.horizon(2.0 * top, slowest_turn);
-    let positions: Vec<Point> = fleet.iter().map(|d| d.position).collect();
-    let grid = NeighbourGrid::new(&positions, pair_radius);
-    // Each vessel's problem reads only the positions, so vessels are solved
-    // independently; on every core for large fleets, with the same result.
-    let solve = |i: usize,
-                 (neighbours, shore_points, constraints): &mut (
-        Vec<usize>,
-        Vec<ShorePoint>,
-        Vec<HalfPlane>,
-    )| {
-        let me = fleet[i];
+    let traffic = Traffic::new(
+        barrier,
+        shore,
+        fleet.iter().map(|d| (d.position, d.actual, d.max_speed, d.turn_rate)),
+    );
+    crate::coverage::map_indexed(fleet.len(), parallel, |i, scratch| {
+        traffic.solve(i, fleet[i], scratch)
+    })
+}
+
+/// A vessel's working memory for [`Traffic::solve`], reused from vessel to
+/// vessel so that solving allocates nothing.
+#[derive(Debug, Default)]
+pub struct Scratch {
+    neighbours: Vec<usize>,
+    shore_points: Vec<ShorePoint>,
+    constraints: Vec<HalfPlane>,
+}
+
+/// The fleet as one tick's filters see it: positions, actual ground
+/// velocities and the neighbour grid. Built once per tick; then each
+/// vessel's problem ([`Traffic::solve`]) reads only this and the vessel's
+/// own desire, so vessels are solved independently, in any order and on
+/// any thread, with the same result — which is what lets the coordinator
+/// send each command as soon as it is computed.
+#[derive(Debug)]
+pub struct Traffic<'a> {
+    barrier: Barrier,
+    shore: &'a Shore,
+    positions: Vec<Point>,
+    actual: Vec<Point>,
+    grid: NeighbourGrid,
+}
+
+impl<'a> Traffic<'a> {
+    /// `fleet` yields every vessel's (position, actual ground velocity,
+    /// speed limit, turn rate), in fleet order.
+    pub fn new(
+        barrier: &Barrier,
+        shore: &'a Shore,
+        fleet: impl Iterator<Item = (Point, Point, f64, f64)>,
+    ) -> Traffic<'a> {
+        let (mut positions, mut actual) = (Vec::new(), Vec::new());
+        let (mut top, mut slowest_turn) = (0.0, f64::INFINITY);
+        for (position, velocity, max_speed, turn_rate) in fleet {
+            positions.push(position);
+            actual.push(velocity);
+            top = f64::max(top, max_speed);
+            slowest_turn = f64::min(slowest_turn, turn_rate);
+        }
+        let pair_radius = barrier.safety_distance + barrier.horizon(2.0 * top, slowest_turn);
+        let grid = NeighbourGrid::new(&positions, pair_radius);
+        Traffic {
+            barrier: *barrier,
+            shore,
+            positions,
+            actual,
+            grid,
+        }
+    }
+
+    /// Vessel `i`'s safe velocity and surge interval; `me` is its desire
+    /// (its position and actual velocity must be the ones given to
+    /// [`Traffic::new`]).
+    pub fn solve(&self, i: usize, me: Desire, scratch: &mut Scratch) -> Safe {
+        let barrier = &self.barrier;
+        let Scratch {
+            neighbours,
+            shore_points,
+            constraints,
+        } = scratch;
         let p = me.position;
         constraints.clear();
-        grid.within(
+        self.grid.within(
             i,
             barrier.safety_distance + barrier.horizon(2.0 * me.max_speed, me.turn_rate),
             neighbours,
         );
         for &j in neighbours.iter() {
-            let d = positions[j] - p;
+            let d = self.positions[j] - p;
             let dist = norm2(d).sqrt();
             // n from j to i; coincident vessels part along x, the lower
             // index to the west, so that the pair still separates.
@@ -233,7 +287,7 @@ fn filter_with(barrier: &Barrier, shore: &Shore, fleet: &[Desire], parallel: boo
             } else {
                 Point { x: 1.0, y: 0.0 }
             };
-            let closing = -dot(n, me.actual - fleet[j].actual);
+            let closing = -dot(n, me.actual - self.actual[j]);
             let gap =
                 dist - barrier.safety_distance - barrier.prediction(n, &me) * closing.max(0.0);
             constraints.push(HalfPlane {
@@ -241,8 +295,8 @@ fn filter_with(barrier: &Barrier, shore: &Shore, fleet: &[Desire], parallel: boo
                 b: -0.5 * barrier.stopping_speed(gap),
             });
         }
-        let inside = shore.region().contains(p);
-        shore.near(
+        let inside = self.shore.region().contains(p);
+        self.shore.near(
             p,
             barrier.shore_distance + barrier.horizon(me.max_speed, me.turn_rate),
             shore_points,
@@ -271,8 +325,7 @@ fn filter_with(barrier: &Barrier, shore: &Shore, fleet: &[Desire], parallel: boo
             velocity,
             surge: surge_interval(me, constraints),
         }
-    };
-    crate::coverage::map_indexed(fleet.len(), parallel, solve)
+    }
 }
 
 /// The nearest safe velocity to the nominal one (see the module doc for

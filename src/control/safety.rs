@@ -59,7 +59,7 @@
 
 use std::borrow::BorrowMut;
 
-use super::barrier::{Barrier, Desire, Safe, filter};
+use super::barrier::{Barrier, Desire, Safe, Scratch, Traffic};
 use super::guidance::{Command, Guidance, GuidanceMode};
 use super::model::State;
 use crate::coverage::goal::reachable_goal;
@@ -215,7 +215,9 @@ impl SafetyLayer {
     }
 
     /// The commands of one tick; see the module doc for the contract.
-    pub fn commands<G: BorrowMut<Guidance>>(
+    /// [`SafetyLayer::prepare`] then [`SafetyLayer::command`] for every
+    /// vessel, on every core for large fleets (the same result either way).
+    pub fn commands<G: BorrowMut<Guidance> + Send>(
         &self,
         t: f64,
         states: &[State],
@@ -224,95 +226,141 @@ impl SafetyLayer {
     ) -> Vec<SafeCommand> {
         debug_assert!(states.len() == cells.len() && cells.len() == guidance.len());
         let n = states.len().min(cells.len()).min(guidance.len());
-        let clearance = self.params.goal_clearance();
-        // Goals, routes and nominal velocities: each vessel on its own.
-        let plans: Vec<(Point, Point, f64, Point)> = (0..n)
-            .map(|i| {
-                let s = &states[i];
-                let p = Point { x: s.x, y: s.y };
-                let straight = |goal: Point| (goal, (goal.x - p.x).hypot(goal.y - p.y));
-                let (goal, (towards, remaining)) = if self.params.reachable_goals {
-                    let goal = reachable_goal(&self.shore, &cells[i], p, clearance);
-                    let leg = self.roadmap.leg(&self.shore, p, goal);
-                    (goal, leg.map_or(straight(goal), |l| (l.towards, l.length)))
-                } else {
-                    (cells[i].centroid, straight(cells[i].centroid))
-                };
-                let g: &Guidance = guidance[i].borrow_mut();
-                let (wx, wy) = g.desired_velocity(s, (towards.x, towards.y), remaining);
-                (goal, towards, remaining, Point { x: wx, y: wy })
-            })
-            .collect();
-        let filtered = if self.params.filter {
-            let desires: Vec<Desire> = (0..n)
-                .map(|i| {
-                    let gains = guidance[i].borrow_mut().gains;
-                    Desire {
-                        position: Point {
-                            x: states[i].x,
-                            y: states[i].y,
-                        },
-                        actual: {
-                            let (vx, vy) = states[i].ground_velocity();
-                            Point { x: vx, y: vy }
-                        },
-                        velocity: plans[i].3,
-                        max_speed: gains.max_speed,
-                        turn_rate: gains.max_yaw_rate,
-                        bow: Point {
-                            x: states[i].psi.cos(),
-                            y: states[i].psi.sin(),
-                        },
-                    }
-                })
-                .collect();
-            filter(&self.params.barrier(), &self.shore, &desires)
-        } else {
-            plans
-                .iter()
-                .map(|p| Safe {
-                    velocity: p.3,
-                    surge: (f64::NEG_INFINITY, f64::INFINITY),
-                })
-                .collect()
+        let tick = self.prepare(t, &states[..n], &guidance[..n]);
+        let one = |(i, g): (usize, &mut G), scratch: &mut Scratch| {
+            self.command(&tick, i, &states[i], &cells[i], g.borrow_mut(), scratch)
         };
-        (0..n)
-            .map(|i| {
-                let (goal, towards, remaining, nominal) = plans[i];
-                let g: &mut Guidance = guidance[i].borrow_mut();
-                let to = (towards.x, towards.y);
-                if g.gains.mode == GuidanceMode::Paper {
-                    let command = g.track(t, &states[i], to, remaining, (nominal.x, nominal.y));
-                    return SafeCommand {
-                        command,
-                        goal,
-                        towards,
-                        nominal,
-                        filtered: nominal,
-                        intervened: false,
-                    };
-                }
-                let Safe { velocity: w, surge } = filtered[i];
-                let mut command = g.track(t, &states[i], to, remaining, (w.x, w.y));
-                // The thrust is along the bow: ask only for the surge that
-                // keeps every gap while the hull turns (see `barrier`).
-                let u_d = command.u_d.clamp(surge.0, surge.1);
-                let clamped = (u_d - command.u_d).abs() > self.params.tolerance;
-                if u_d != command.u_d {
-                    command.u_d = u_d;
-                    command.u_d_dot = 0.0;
-                }
-                SafeCommand {
-                    command,
-                    goal,
-                    towards,
-                    nominal,
-                    filtered: w,
-                    intervened: clamped || norm2(w - nominal).sqrt() > self.params.tolerance,
-                }
-            })
-            .collect()
+        if n >= crate::coverage::PARALLEL_MIN {
+            use rayon::prelude::*;
+            guidance[..n]
+                .par_iter_mut()
+                .enumerate()
+                .map_init(Scratch::default, |scratch, item| one(item, scratch))
+                .collect()
+        } else {
+            let mut scratch = Scratch::default();
+            guidance[..n]
+                .iter_mut()
+                .enumerate()
+                .map(|item| one(item, &mut scratch))
+                .collect()
+        }
     }
+
+    /// The fleet-wide part of a tick: what every vessel's filter reads of
+    /// the others (positions, actual velocities, the neighbour grid). Then
+    /// [`SafetyLayer::command`] serves each vessel on its own.
+    pub fn prepare<G: BorrowMut<Guidance>>(
+        &self,
+        t: f64,
+        states: &[State],
+        guidance: &[G],
+    ) -> SafetyTick<'_> {
+        let traffic = self.params.filter.then(|| {
+            Traffic::new(
+                &self.params.barrier(),
+                &self.shore,
+                states.iter().zip(guidance).map(|(s, g)| {
+                    let gains = g.borrow().gains;
+                    let (vx, vy) = s.ground_velocity();
+                    (
+                        Point { x: s.x, y: s.y },
+                        Point { x: vx, y: vy },
+                        gains.max_speed,
+                        gains.max_yaw_rate,
+                    )
+                }),
+            )
+        });
+        SafetyTick { t, traffic }
+    }
+
+    /// Vessel `i`'s command: `state`, `cell` and `guidance` are its own, `i`
+    /// its index in the states given to [`SafetyLayer::prepare`]. Vessels
+    /// may be served in any order and on any thread.
+    pub fn command(
+        &self,
+        tick: &SafetyTick<'_>,
+        i: usize,
+        state: &State,
+        cell: &CellResult,
+        guidance: &mut Guidance,
+        scratch: &mut Scratch,
+    ) -> SafeCommand {
+        let s = state;
+        let p = Point { x: s.x, y: s.y };
+        // Goal, route and nominal velocity.
+        let straight = |goal: Point| (goal, (goal.x - p.x).hypot(goal.y - p.y));
+        let (goal, (towards, remaining)) = if self.params.reachable_goals {
+            let goal = reachable_goal(&self.shore, cell, p, self.params.goal_clearance());
+            let leg = self.roadmap.leg(&self.shore, p, goal);
+            (goal, leg.map_or(straight(goal), |l| (l.towards, l.length)))
+        } else {
+            (cell.centroid, straight(cell.centroid))
+        };
+        let (wx, wy) = guidance.desired_velocity(s, (towards.x, towards.y), remaining);
+        let nominal = Point { x: wx, y: wy };
+        let to = (towards.x, towards.y);
+        if guidance.gains.mode == GuidanceMode::Paper {
+            let command = guidance.track(tick.t, s, to, remaining, (nominal.x, nominal.y));
+            return SafeCommand {
+                command,
+                goal,
+                towards,
+                nominal,
+                filtered: nominal,
+                intervened: false,
+            };
+        }
+        let Safe { velocity: w, surge } = match &tick.traffic {
+            Some(traffic) => {
+                let gains = guidance.gains;
+                let (vx, vy) = s.ground_velocity();
+                let me = Desire {
+                    position: p,
+                    actual: Point { x: vx, y: vy },
+                    velocity: nominal,
+                    max_speed: gains.max_speed,
+                    turn_rate: gains.max_yaw_rate,
+                    bow: Point {
+                        x: s.psi.cos(),
+                        y: s.psi.sin(),
+                    },
+                };
+                traffic.solve(i, me, scratch)
+            }
+            None => Safe {
+                velocity: nominal,
+                surge: (f64::NEG_INFINITY, f64::INFINITY),
+            },
+        };
+        let mut command = guidance.track(tick.t, s, to, remaining, (w.x, w.y));
+        // The thrust is along the bow: ask only for the surge that
+        // keeps every gap while the hull turns (see `barrier`).
+        let u_d = command.u_d.clamp(surge.0, surge.1);
+        let clamped = (u_d - command.u_d).abs() > self.params.tolerance;
+        if u_d != command.u_d {
+            command.u_d = u_d;
+            command.u_d_dot = 0.0;
+        }
+        SafeCommand {
+            command,
+            goal,
+            towards,
+            nominal,
+            filtered: w,
+            intervened: clamped || norm2(w - nominal).sqrt() > self.params.tolerance,
+        }
+    }
+}
+
+/// One tick's fleet-wide inputs to [`SafetyLayer::command`]
+/// ([`SafetyLayer::prepare`]).
+#[derive(Debug)]
+pub struct SafetyTick<'a> {
+    t: f64,
+    /// The others as the filter sees them; `None` with the filter off.
+    traffic: Option<Traffic<'a>>,
 }
 
 #[cfg(test)]
