@@ -200,7 +200,9 @@ fn filter_with(barrier: &Barrier, shore: &Shore, fleet: &[Desire], parallel: boo
     let traffic = Traffic::new(
         barrier,
         shore,
-        fleet.iter().map(|d| (d.position, d.actual, d.max_speed, d.turn_rate)),
+        fleet
+            .iter()
+            .map(|d| (d.position, d.actual, d.max_speed, d.turn_rate)),
     );
     crate::coverage::map_indexed(fleet.len(), parallel, |i, scratch| {
         traffic.solve(i, fleet[i], scratch)

@@ -57,7 +57,7 @@
 //!   waypoints; at 1000 vessels about a quarter of the evaluation's time
 //!   (`cargo bench --bench sim -- safety` against `--bench evaluate`).
 
-use std::borrow::BorrowMut;
+use std::borrow::{Borrow, BorrowMut};
 
 use super::barrier::{Barrier, Desire, Safe, Scratch, Traffic};
 use super::guidance::{Command, Guidance, GuidanceMode};
@@ -250,7 +250,7 @@ impl SafetyLayer {
     /// The fleet-wide part of a tick: what every vessel's filter reads of
     /// the others (positions, actual velocities, the neighbour grid). Then
     /// [`SafetyLayer::command`] serves each vessel on its own.
-    pub fn prepare<G: BorrowMut<Guidance>>(
+    pub fn prepare<G: Borrow<Guidance>>(
         &self,
         t: f64,
         states: &[State],

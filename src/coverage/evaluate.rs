@@ -76,7 +76,12 @@ pub fn evaluate(region: &Region, risk: &RiskField, fleet: &Fleet, options: &Opti
     Evaluation { h, cells }
 }
 
-fn cell_figures(
+/// One vessel's figures, from its geometry in the partition of the whole
+/// fleet ([`power_cells_with`]): [`evaluate`] is the partition and then this
+/// for every vessel, so a caller may compute the cells one by one, in any
+/// order and on any thread, with the same result. `near` is scratch space,
+/// reused from cell to cell.
+pub fn cell_figures(
     region: &Region,
     risk: &RiskField,
     vessel: &super::Vessel,

@@ -26,6 +26,7 @@ use std::time::Duration;
 use axum::Router;
 use axum::extract::DefaultBodyLimit;
 use axum::routing::{delete, get, post, put};
+use axum::serve::ListenerExt as _;
 use tokio::net::TcpListener;
 use tokio::sync::{mpsc, watch};
 use tokio_util::sync::CancellationToken;
@@ -203,6 +204,14 @@ pub async fn serve(
         writes: Arc::new(auth::write_limiter(config.write_rate, config.write_burst)),
     };
     let signal = shutdown.clone();
+    // Commands and poses are small frames that must leave at once: without
+    // TCP_NODELAY a command written while the link's previous frame is
+    // unacknowledged waits for the vessel's delayed ACK (up to 40 ms).
+    let listener = listener.tap_io(|tcp| {
+        if let Err(e) = tcp.set_nodelay(true) {
+            tracing::warn!(error = %e, "TCP_NODELAY could not be set on a connection");
+        }
+    });
     axum::serve(listener, router(app))
         .with_graceful_shutdown(async move { signal.cancelled().await })
         .await?;

@@ -10,21 +10,34 @@
 //!   numbers, so tick N is always mission time N / tick_hz and is due at
 //!   wall time origin + N / (tick_hz × time warp);
 //! - mission time is in mission seconds whatever the time warp, so guidance
-//!   filters and liveness are in mission seconds.
+//!   filters and liveness are in mission seconds;
+//! - a tick is pipelined: once the partition is known, each vessel's cell,
+//!   goal, filter and command are computed on their own (on every core for
+//!   64 vessels or more) and the command is handed to its link as soon as it
+//!   is ready; cells, H and commands are bit for bit those of
+//!   [`evaluate`] and [`SafetyLayer::commands`](crate::control::safety::SafetyLayer::commands)
+//!   (the functions `seacover sim` calls);
+//! - the snapshot for readers is built after the tick's commands are
+//!   written (or half a period later at most), never while the links are
+//!   writing them.
 
 use std::collections::BTreeMap;
 use std::sync::Arc;
 use std::time::Duration;
 
+use axum::extract::ws::Utf8Bytes;
 use tokio::sync::{mpsc, oneshot, watch};
 use tokio_util::sync::CancellationToken;
 
 use super::error::ApiError;
 use super::store::Store;
+use crate::control::barrier::Scratch;
 use crate::control::guidance::{Guidance, GuidanceGains, GuidanceMode};
 use crate::control::model::State;
 use crate::control::safety::{SafetyLayer, SafetyParams};
-use crate::coverage::{Evaluation, Fleet, Options, RiskField, Vessel, evaluate};
+use crate::coverage::evaluate::cell_figures;
+use crate::coverage::partition::power_cells_with;
+use crate::coverage::{CellResult, Evaluation, Fleet, Options, RiskField, Vessel, evaluate};
 use crate::geometry::{Point, Region};
 use crate::protocol::{
     ActuatorDocument, CommandDocument, CoordinatorMessage, CoverageDocument, GuidanceDocument,
@@ -401,18 +414,27 @@ struct Link {
     poses: watch::Receiver<Option<PoseDocument>>,
 }
 
-/// What the tick task hands a link to send: a message, and for a command the
-/// moment its tick was due, so the link can record how long the command took
-/// to reach the socket (`seacover_command_delay_seconds`).
+/// What the tick task hands a link to send.
 #[derive(Debug)]
-pub struct Outgoing {
-    pub message: CoordinatorMessage,
-    pub due: Option<std::time::Instant>,
+pub enum Outgoing {
+    /// A welcome or an error; an error closes the link.
+    Message(CoordinatorMessage),
+    /// A tick's command, serialized on the thread that computed it (the
+    /// link only frames and writes it).
+    Command {
+        text: Utf8Bytes,
+        /// When its tick was due, for `seacover_command_delay_seconds`.
+        due: std::time::Instant,
+        /// Dropped once the command is written or dropped: when the last of
+        /// a tick's is gone, the tick's fan-out is over and the tick task
+        /// publishes its snapshot (see [`Fanout`]).
+        written: mpsc::Sender<()>,
+    },
 }
 
 impl From<CoordinatorMessage> for Outgoing {
     fn from(message: CoordinatorMessage) -> Self {
-        Outgoing { message, due: None }
+        Outgoing::Message(message)
     }
 }
 
@@ -442,6 +464,17 @@ struct Published {
     time: f64,
     live: Vec<String>,
     evaluation: Option<Evaluation>,
+}
+
+/// A tick whose commands are on their way. Its snapshot for dashboards is
+/// built once they are all written (or dropped), or at the deadline for a
+/// link that cannot keep up: building it takes milliseconds of a core that
+/// the links need while they write the tick's commands.
+struct Fanout {
+    published: Published,
+    /// Closed when the last command's `written` sender is dropped.
+    written: mpsc::Receiver<()>,
+    deadline: tokio::time::Instant,
 }
 
 /// The tick task.
@@ -508,10 +541,14 @@ impl Coordinator {
         metrics::gauge!(super::metrics::TICK_ORIGIN).set(origin);
         metrics::gauge!(super::metrics::TICK_PERIOD).set(period.as_secs_f64());
         let mut last: Option<tokio::time::Instant> = None;
+        let mut fanout: Option<Fanout> = None;
         loop {
             tokio::select! {
                 _ = shutdown.cancelled() => break,
                 due = ticker.tick() => {
+                    if let Some(previous) = fanout.take() {
+                        self.finish_tick(previous.published);
+                    }
                     // Ticks the interval skipped because one overran keep
                     // their numbers: tick N always means mission time
                     // N / tick_hz, whatever the load.
@@ -524,15 +561,33 @@ impl Coordinator {
                     }
                     last = Some(due);
                     let started = std::time::Instant::now();
-                    let tick = self.on_tick(advance, due.into_std());
+                    let (written_tx, written) = mpsc::channel(1);
+                    let published = self.on_tick(advance, due.into_std(), written_tx);
                     metrics::histogram!(super::metrics::TICK_SECONDS).record(started.elapsed().as_secs_f64());
-                    // The links woken with this tick's commands run first;
-                    // the snapshot for dashboards can wait a few ms.
-                    tokio::task::yield_now().await;
-                    self.finish_tick(tick);
+                    fanout = Some(Fanout { published, written, deadline: due + period / 2 });
+                }
+                () = async {
+                    match fanout.as_mut() {
+                        Some(f) => {
+                            tokio::select! {
+                                _ = f.written.recv() => {}
+                                _ = tokio::time::sleep_until(f.deadline) => {}
+                            }
+                        }
+                        None => std::future::pending().await,
+                    }
+                } => {
+                    if let Some(done) = fanout.take() {
+                        self.finish_tick(done.published);
+                    }
                 }
                 request = requests.recv() => match request {
-                    Some(r) => self.on_request(r),
+                    Some(r) => {
+                        if self.on_request(r) {
+                            // A change published a newer snapshot.
+                            fanout = None;
+                        }
+                    }
                     None => break,
                 },
             }
@@ -550,7 +605,8 @@ impl Coordinator {
         }
     }
 
-    fn on_request(&mut self, request: Request) {
+    /// Serves one request; `true` when it published a snapshot.
+    fn on_request(&mut self, request: Request) -> bool {
         match request {
             Request::Register {
                 id,
@@ -565,14 +621,14 @@ impl Coordinator {
                     let _ = reply.send(Err(ApiError::Invalid(
                         "actuator.k: must be a finite number > 0".into(),
                     )));
-                    return;
+                    return false;
                 }
                 if actuator.beta != self.mission.actuator.beta {
                     let _ = reply.send(Err(ApiError::Unsupported(format!(
                         "actuator.beta: the mission's vessels share beta = {}; different beta give curved cell edges",
                         self.mission.actuator.beta
                     ))));
-                    return;
+                    return false;
                 }
                 if !self.vessels.contains_key(&id)
                     && self.vessels.len() >= crate::coverage::fleet::MAX_VESSELS
@@ -581,7 +637,7 @@ impl Coordinator {
                         "the mission already has {} vessels, the most it takes",
                         crate::coverage::fleet::MAX_VESSELS
                     ))));
-                    return;
+                    return false;
                 }
                 let gains = self.mission.guidance;
                 let entry = self.vessels.entry(id).or_insert_with(|| Entry {
@@ -608,6 +664,7 @@ impl Coordinator {
                     poses,
                 });
                 let _ = reply.send(Ok(self.mission.tick_hz));
+                false
             }
             Request::Change { change, reply } => {
                 let outcome = self.mission.changed(&change).and_then(|(next, answer)| {
@@ -625,7 +682,8 @@ impl Coordinator {
                     self.mission = next;
                     Ok(answer)
                 });
-                if outcome.is_ok() {
+                let changed = outcome.is_ok();
+                if changed {
                     // Readers see the write at once, not at the next tick.
                     let time = self.tick as f64 / self.mission.tick_hz;
                     let live = self.live_ids();
@@ -633,6 +691,7 @@ impl Coordinator {
                     self.publish(time, &live, evaluation.as_ref());
                 }
                 let _ = reply.send(outcome);
+                changed
             }
             Request::Forget { id, reply } => {
                 let outcome = match self.vessels.remove(&id) {
@@ -655,7 +714,9 @@ impl Coordinator {
                     }
                     None => Err(ApiError::NotFound(format!("no vessel {id:?}"))),
                 };
+                let forgotten = outcome.is_ok();
                 let _ = reply.send(outcome);
+                forgotten
             }
             Request::Gone { id, link } => {
                 let tick = self.tick;
@@ -667,6 +728,7 @@ impl Coordinator {
                         take_pose(entry, &mut link.poses, tick);
                     }
                 }
+                false
             }
         }
     }
@@ -701,78 +763,141 @@ impl Coordinator {
 
     /// One tick, `advance` ticks after the previous one (more than one when
     /// the interval skipped some), due at `due`.
-    fn on_tick(&mut self, advance: u64, due: std::time::Instant) -> Published {
+    ///
+    /// Pipelined: after the partition (which needs every position), each
+    /// vessel's cell figures, goal, filter and command are computed on their
+    /// own (on every core for large fleets) and the command is serialized
+    /// and handed to its link at once, so the first commands are on the
+    /// wire while the last are still being computed. Each handed command
+    /// holds a clone of `written`. The cells and H are those of
+    /// [`evaluate`], and the commands those of
+    /// [`SafetyLayer::commands`](crate::control::safety::SafetyLayer::commands),
+    /// bit for bit.
+    fn on_tick(
+        &mut self,
+        advance: u64,
+        due: std::time::Instant,
+        written: mpsc::Sender<()>,
+    ) -> Published {
         self.tick += advance;
         self.collect_poses();
         let time = self.tick as f64 / self.mission.tick_hz;
         let live = self.live_ids();
-        let evaluation = self.evaluate_live(&live);
-        if let Some(eval) = &evaluation {
-            // The live entries, in `live`'s order (both are in id order).
-            let mut wanted = live.iter().peekable();
-            let mut entries: Vec<&mut Entry> = Vec::with_capacity(live.len());
-            for (id, entry) in self.vessels.iter_mut() {
-                if wanted.next_if(|w| *w == id).is_some() {
-                    entries.push(entry);
-                }
-            }
-            let states: Vec<State> = entries
-                .iter()
-                .map(|entry| {
-                    let pose = entry.pose.as_ref().expect("live vessels have a pose");
-                    State {
-                        x: pose.x,
-                        y: pose.y,
-                        psi: pose.psi,
-                        vel: crate::control::Vec3::new(pose.u, pose.v, pose.r),
-                    }
-                })
-                .collect();
-            // Goals inside the vessel's own piece of water, routes round
-            // islands and the collision filter: the same function as
-            // `seacover sim`.
-            let safe = {
-                let mut guidance: Vec<&mut Guidance> =
-                    entries.iter_mut().map(|e| &mut e.guidance).collect();
-                self.mission
-                    .layer
-                    .commands(time, &states, &eval.cells, &mut guidance)
+        let Some(fleet) = self.fleet(&live) else {
+            return Published {
+                time,
+                live,
+                evaluation: None,
             };
-            let interventions = safe.iter().filter(|s| s.intervened).count();
-            metrics::counter!(super::metrics::SAFETY_INTERVENTIONS).increment(interventions as u64);
-            for ((entry, sc), cell) in entries.into_iter().zip(&safe).zip(&eval.cells) {
-                let (cmd, c) = (sc.command, cell.centroid);
-                let doc = CommandDocument {
-                    tick: self.tick,
-                    u_d: cmd.u_d,
-                    r_d: cmd.r_d,
-                    u_d_dot: cmd.u_d_dot,
-                    r_d_dot: cmd.r_d_dot,
-                    centroid: [c.x, c.y],
-                    e: cmd.e,
-                    psi_e: cmd.psi_e,
-                };
-                if let Some(link) = &entry.link {
-                    // A link that cannot keep up misses this command; the next
-                    // one supersedes it anyway.
-                    if link
-                        .tx
-                        .try_send(Outgoing {
-                            message: CoordinatorMessage::Command(doc.clone()),
-                            due: Some(due),
-                        })
-                        .is_err()
-                    {
-                        metrics::counter!(super::metrics::MESSAGES_REJECTED, "reason" => "link_full").increment(1);
-                    }
-                }
-                entry.last_command = Some(doc);
+        };
+        // The live entries, in `live`'s order (both are in id order).
+        let mut wanted = live.iter().peekable();
+        let mut entries: Vec<&mut Entry> = Vec::with_capacity(live.len());
+        for (id, entry) in self.vessels.iter_mut() {
+            if wanted.next_if(|w| *w == id).is_some() {
+                entries.push(entry);
             }
         }
+        let states: Vec<State> = entries
+            .iter()
+            .map(|entry| {
+                let pose = entry.pose.as_ref().expect("live vessels have a pose");
+                State {
+                    x: pose.x,
+                    y: pose.y,
+                    psi: pose.psi,
+                    vel: crate::control::Vec3::new(pose.u, pose.v, pose.r),
+                }
+            })
+            .collect();
+        let mission = &self.mission;
+        let options = Options {
+            parallel: true,
+            ..Options::default()
+        };
+        let parallel = entries.len() >= crate::coverage::PARALLEL_MIN;
+        let geometries = power_cells_with(&mission.region, &fleet, parallel);
+        // Goals inside the vessel's own piece of water, routes round islands
+        // and the collision filter: the same functions as `seacover sim`.
+        let layer = &mission.layer;
+        let safety = {
+            let guidance: Vec<&Guidance> = entries.iter().map(|e| &e.guidance).collect();
+            layer.prepare(time, &states, &guidance)
+        };
+        let tick = self.tick;
+        let one = |i: usize,
+                   entry: &mut Entry,
+                   geometry,
+                   (near, scratch): &mut (Vec<usize>, Scratch)|
+         -> (CellResult, bool) {
+            let vessel = &fleet.vessels()[i];
+            let cell = cell_figures(
+                &mission.region,
+                &mission.risk,
+                vessel,
+                fleet.beta(),
+                geometry,
+                &options,
+                near,
+            );
+            let sc = layer.command(&safety, i, &states[i], &cell, &mut entry.guidance, scratch);
+            let (cmd, c) = (sc.command, cell.centroid);
+            let doc = CommandDocument {
+                tick,
+                u_d: cmd.u_d,
+                r_d: cmd.r_d,
+                u_d_dot: cmd.u_d_dot,
+                r_d_dot: cmd.r_d_dot,
+                centroid: [c.x, c.y],
+                e: cmd.e,
+                psi_e: cmd.psi_e,
+            };
+            if let Some(link) = &entry.link {
+                let text = serde_json::to_string(&CoordinatorMessage::Command(doc.clone()))
+                    .expect("commands serialize");
+                // A link that cannot keep up misses this command; the next
+                // one supersedes it anyway.
+                let sent = link.tx.try_send(Outgoing::Command {
+                    text: Utf8Bytes::from(text),
+                    due,
+                    written: written.clone(),
+                });
+                if sent.is_err() {
+                    metrics::counter!(super::metrics::MESSAGES_REJECTED, "reason" => "link_full")
+                        .increment(1);
+                }
+            }
+            entry.last_command = Some(doc);
+            (cell, sc.intervened)
+        };
+        let done: Vec<(CellResult, bool)> = if parallel {
+            use rayon::prelude::*;
+            entries
+                .par_iter_mut()
+                .zip(geometries.into_par_iter())
+                .enumerate()
+                .map_init(
+                    || (Vec::new(), Scratch::default()),
+                    |scratch, (i, (entry, geometry))| one(i, entry, geometry, scratch),
+                )
+                .collect()
+        } else {
+            let mut scratch = (Vec::new(), Scratch::default());
+            entries
+                .iter_mut()
+                .zip(geometries)
+                .enumerate()
+                .map(|(i, (entry, geometry))| one(i, entry, geometry, &mut scratch))
+                .collect()
+        };
+        let interventions = done.iter().filter(|(_, intervened)| *intervened).count();
+        metrics::counter!(super::metrics::SAFETY_INTERVENTIONS).increment(interventions as u64);
+        let cells: Vec<CellResult> = done.into_iter().map(|(cell, _)| cell).collect();
+        let h = cells.iter().map(|c| c.mass).sum();
         Published {
             time,
             live,
-            evaluation,
+            evaluation: Some(Evaluation { h, cells }),
         }
     }
 
@@ -791,7 +916,9 @@ impl Coordinator {
         metrics::gauge!(super::metrics::COVERAGE_H).set(evaluation.as_ref().map_or(0.0, |e| e.h));
     }
 
-    fn evaluate_live(&self, live: &[String]) -> Option<Evaluation> {
+    /// The fleet of the `live` vessels, in that order; `None` when there
+    /// are none.
+    fn fleet(&self, live: &[String]) -> Option<Fleet> {
         if live.is_empty() {
             return None;
         }
@@ -807,13 +934,15 @@ impl Coordinator {
                 }
             })
             .collect();
-        let fleet = Fleet::new(vessels).ok()?;
+        Fleet::new(vessels).ok()
+    }
+
+    fn evaluate_live(&self, live: &[String]) -> Option<Evaluation> {
+        let fleet = self.fleet(live)?;
         Some(evaluate(
             &self.mission.region,
             &self.mission.risk,
             &fleet,
-            // On every core: the evaluation is most of a tick's critical
-            // path, from the tick being due to the last command sent.
             &Options {
                 parallel: true,
                 ..Options::default()
@@ -955,19 +1084,35 @@ mod tests {
             for ((pose_tx, _), s) in links.iter().zip(&states) {
                 pose_tx.send_replace(Some(pose(s.x, s.y, s.psi, s.vel.x)));
             }
-            let published = c.on_tick(1, std::time::Instant::now());
+            let (written_tx, mut written) = mpsc::channel(1);
+            let published = c.on_tick(1, std::time::Instant::now(), written_tx);
             let eval = published.evaluation.as_ref().unwrap();
+            // The pipelined tick's cells and H are the evaluation's.
+            let fleet = Fleet::new(
+                states
+                    .iter()
+                    .map(|s| Vessel {
+                        position: Point { x: s.x, y: s.y },
+                        k: mission.actuator.k,
+                        beta: mission.actuator.beta,
+                    })
+                    .collect(),
+            )
+            .unwrap();
+            assert_eq!(
+                eval,
+                &evaluate(&mission.region, &mission.risk, &fleet, &Options::default())
+            );
             let expected = mission
                 .layer
                 .commands(published.time, &states, &eval.cells, &mut local);
             intervened += expected.iter().filter(|s| s.intervened).count();
             for ((_, rx), want) in links.iter_mut().zip(&expected) {
-                let Ok(Outgoing {
-                    message: CoordinatorMessage::Command(got),
-                    due: Some(_),
-                }) = rx.try_recv()
-                else {
+                let Ok(Outgoing::Command { text, .. }) = rx.try_recv() else {
                     panic!("tick {tick}: no command");
+                };
+                let Ok(CoordinatorMessage::Command(got)) = serde_json::from_str(&text) else {
+                    panic!("tick {tick}: not a command: {text}");
                 };
                 assert_eq!(got.tick, tick + 1);
                 assert_eq!(
@@ -976,10 +1121,88 @@ mod tests {
                     "tick {tick}"
                 );
             }
+            // Every command was taken (and its guard dropped with it): the
+            // fan-out is over.
+            assert_eq!(
+                written.try_recv(),
+                Err(mpsc::error::TryRecvError::Disconnected)
+            );
         }
         assert!(
             intervened >= 2,
             "the head-on pair never triggered the filter"
         );
+    }
+
+    /// A fleet large enough for the tick to run on every core: its cells, H
+    /// and every command are still exactly those of `evaluate` and the
+    /// safety layer, and each link gets its own vessel's command.
+    #[test]
+    fn a_large_fleets_parallel_tick_is_the_evaluation_and_the_safety_layer() {
+        let mission = Mission::paper();
+        let settings = TickSettings {
+            time_warp: 1.0,
+            liveness: 3.0,
+        };
+        let (mut c, _snapshots) = Coordinator::new(mission.clone(), settings, None);
+        let n = 2 * crate::coverage::PARALLEL_MIN;
+        // Ids in the coordinator's (id) order.
+        let ids: Vec<String> = (0..n).map(|i| format!("usv-{i:03}")).collect();
+        let mut links: Vec<_> = ids
+            .iter()
+            .enumerate()
+            .map(|(i, id)| register(&mut c, id, i as u64))
+            .collect();
+        let states: Vec<State> = (0..n)
+            .map(|i| State {
+                x: 5.0 + 90.0 * ((i * 37) % n) as f64 / n as f64,
+                y: 5.0 + 90.0 * (i % 16) as f64 / 16.0,
+                psi: 0.1 * i as f64,
+                vel: Vec3::new(0.5, 0.0, 0.0),
+            })
+            .collect();
+        for ((pose_tx, _), s) in links.iter().zip(&states) {
+            pose_tx.send_replace(Some(pose(s.x, s.y, s.psi, s.vel.x)));
+        }
+        let (written_tx, _written) = mpsc::channel(1);
+        let published = c.on_tick(1, std::time::Instant::now(), written_tx);
+        let eval = published.evaluation.as_ref().unwrap();
+        let fleet = Fleet::new(
+            states
+                .iter()
+                .map(|s| Vessel {
+                    position: Point { x: s.x, y: s.y },
+                    k: mission.actuator.k,
+                    beta: mission.actuator.beta,
+                })
+                .collect(),
+        )
+        .unwrap();
+        assert_eq!(
+            eval,
+            &evaluate(&mission.region, &mission.risk, &fleet, &Options::default())
+        );
+        let mut local: Vec<Guidance> = (0..n).map(|_| Guidance::new(mission.guidance)).collect();
+        let expected = mission
+            .layer
+            .commands(published.time, &states, &eval.cells, &mut local);
+        for (i, ((_, rx), want)) in links.iter_mut().zip(&expected).enumerate() {
+            let Ok(Outgoing::Command { text, .. }) = rx.try_recv() else {
+                panic!("vessel {i}: no command");
+            };
+            let Ok(CoordinatorMessage::Command(got)) = serde_json::from_str(&text) else {
+                panic!("vessel {i}: not a command: {text}");
+            };
+            assert_eq!(
+                (got.u_d, got.r_d, got.e, got.centroid),
+                (
+                    want.command.u_d,
+                    want.command.r_d,
+                    want.command.e,
+                    [eval.cells[i].centroid.x, eval.cells[i].centroid.y]
+                ),
+                "vessel {i}"
+            );
+        }
     }
 }

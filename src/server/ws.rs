@@ -65,15 +65,67 @@ fn finite(p: &PoseDocument) -> bool {
         .all(|v| v.is_finite())
 }
 
-async fn run_link(socket: WebSocket, app: AppState) {
-    let (mut sink, mut stream) = socket.split();
+/// A pose frame, read without the tagged enum's buffering of the whole
+/// object into an intermediate tree (a link reads 20 of them a second). It
+/// accepts exactly the frames that [`VesselMessage`] reads as a pose; any
+/// other frame, good or bad, falls back to [`VesselMessage`] and its errors.
+/// Its fields are [`PoseDocument`]'s (the struct literal in [`parse`]
+/// fails to compile when one is added there and not here).
+#[derive(serde::Deserialize)]
+struct PoseFrame {
+    #[serde(rename = "type")]
+    _kind: PoseTag,
+    t: f64,
+    x: f64,
+    y: f64,
+    psi: f64,
+    u: f64,
+    v: f64,
+    r: f64,
+    #[serde(default)]
+    telemetry: Option<serde_json::Value>,
+}
+
+#[derive(serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+enum PoseTag {
+    Pose,
+}
+
+fn parse(text: &str) -> Result<VesselMessage, serde_json::Error> {
+    match serde_json::from_str::<PoseFrame>(text) {
+        Ok(PoseFrame {
+            _kind: PoseTag::Pose,
+            t,
+            x,
+            y,
+            psi,
+            u,
+            v,
+            r,
+            telemetry,
+        }) => Ok(VesselMessage::Pose(PoseDocument {
+            t,
+            x,
+            y,
+            psi,
+            u,
+            v,
+            r,
+            telemetry,
+        })),
+        Err(_) => serde_json::from_str(text),
+    }
+}
+
+async fn run_link(mut socket: WebSocket, app: AppState) {
     // The first frame must be a hello.
     let hello = tokio::select! {
         _ = app.shutdown.cancelled() => return,
-        first = tokio::time::timeout(Duration::from_secs(10), stream.next()) => first,
+        first = tokio::time::timeout(Duration::from_secs(10), socket.recv()) => first,
     };
     let (id, actuator) = match hello {
-        Ok(Some(Ok(Message::Text(t)))) => match serde_json::from_str::<VesselMessage>(&t) {
+        Ok(Some(Ok(Message::Text(t)))) => match parse(&t) {
             Ok(VesselMessage::Hello {
                 vessel,
                 protocol,
@@ -81,7 +133,7 @@ async fn run_link(socket: WebSocket, app: AppState) {
             }) => {
                 if protocol != 1 {
                     return refuse(
-                        sink,
+                        socket,
                         error(
                             "unsupported",
                             format!("protocol {protocol}: only 1 is spoken"),
@@ -91,7 +143,7 @@ async fn run_link(socket: WebSocket, app: AppState) {
                 }
                 if !valid_id(&vessel) {
                     return refuse(
-                        sink,
+                        socket,
                         error("invalid", "vessel: must match [A-Za-z0-9_.-]{1,64}"),
                     )
                     .await;
@@ -99,10 +151,10 @@ async fn run_link(socket: WebSocket, app: AppState) {
                 (vessel, actuator)
             }
             Ok(VesselMessage::Pose(_)) => {
-                return refuse(sink, error("protocol", "a pose before hello")).await;
+                return refuse(socket, error("protocol", "a pose before hello")).await;
             }
             Err(e) => {
-                return refuse(sink, error("malformed", format!("expected hello: {e}"))).await;
+                return refuse(socket, error("malformed", format!("expected hello: {e}"))).await;
             }
         },
         _ => return,
@@ -126,16 +178,16 @@ async fn run_link(socket: WebSocket, app: AppState) {
         .is_ok();
     let tick_hz = match (registered, reply_rx.await) {
         (true, Ok(Ok(hz))) => hz,
-        (_, Ok(Err(e))) => return refuse(sink, error(e.code(), e.to_string())).await,
+        (_, Ok(Err(e))) => return refuse(socket, error(e.code(), e.to_string())).await,
         _ => {
             return refuse(
-                sink,
+                socket,
                 error("shutting_down", "the coordinator is shutting down"),
             )
             .await;
         }
     };
-    if sink
+    if socket
         .send(text(&CoordinatorMessage::Welcome {
             vessel: id.clone(),
             tick_hz,
@@ -147,49 +199,60 @@ async fn run_link(socket: WebSocket, app: AppState) {
     }
 
     let mut garbage = 0;
+    // Handles looked up once: a lookup hashes the name and labels.
+    let poses_in = metrics::counter!(super::metrics::MESSAGES_IN, "kind" => "pose");
+    let commands_out = metrics::counter!(super::metrics::MESSAGES_OUT, "kind" => "command");
+    let command_delay = metrics::histogram!(super::metrics::COMMAND_DELAY);
     // Registered once: a fresh `cancelled()` per frame would lock the
     // token's shared waiter list twice per pose, from every link at once.
     let shutdown = app.shutdown.cancelled();
     tokio::pin!(shutdown);
     loop {
+        // One socket, not split: the branches' futures are dropped before a
+        // handler runs, so a handler may write while the read is idle, and
+        // nothing pays for the lock a split socket shares between halves.
         tokio::select! {
             // In this order: a command waiting behind a pose that is being
             // read and forwarded only arrives later. Commands come once a
             // tick, so they cannot starve the poses.
             biased;
             _ = &mut shutdown => {
-                let _ = sink.send(text(&error("shutting_down", "the coordinator is shutting down"))).await;
+                let _ = socket.send(text(&error("shutting_down", "the coordinator is shutting down"))).await;
                 break;
             }
             out = rx.recv() => match out {
-                Some(Outgoing { message, due }) => {
-                    let fatal = matches!(&message, CoordinatorMessage::Error { .. });
-                    if sink.send(text(&message)).await.is_err() || fatal {
+                Some(Outgoing::Command { text, due, written }) => {
+                    if socket.send(Message::Text(text)).await.is_err() {
                         break;
                     }
-                    if let Some(due) = due {
-                        metrics::histogram!(super::metrics::COMMAND_DELAY)
-                            .record(due.elapsed().as_secs_f64());
+                    drop(written);
+                    commands_out.increment(1);
+                    command_delay.record(due.elapsed().as_secs_f64());
+                }
+                Some(Outgoing::Message(message)) => {
+                    let fatal = matches!(&message, CoordinatorMessage::Error { .. });
+                    if socket.send(text(&message)).await.is_err() || fatal {
+                        break;
                     }
                 }
                 None => break,
             },
-            frame = stream.next() => match frame {
-                Some(Ok(Message::Text(t))) => match serde_json::from_str::<VesselMessage>(&t) {
+            frame = socket.recv() => match frame {
+                Some(Ok(Message::Text(t))) => match parse(&t) {
                     Ok(VesselMessage::Pose(pose)) if finite(&pose) => {
-                        metrics::counter!(super::metrics::MESSAGES_IN, "kind" => "pose").increment(1);
+                        poses_in.increment(1);
                         pose_tx.send_replace(Some(pose));
                     }
                     Ok(VesselMessage::Pose(_)) => {
-                        let _ = sink.send(text(&error("invalid", "pose: every number must be finite"))).await;
+                        let _ = socket.send(text(&error("invalid", "pose: every number must be finite"))).await;
                     }
                     Ok(VesselMessage::Hello { .. }) => {
-                        let _ = sink.send(text(&error("protocol", "hello twice on one link"))).await;
+                        let _ = socket.send(text(&error("protocol", "hello twice on one link"))).await;
                     }
                     Err(e) => {
                         garbage += 1;
                         let fatal = garbage >= MAX_GARBAGE;
-                        let _ = sink.send(text(&error("malformed", format!("{e}")))).await;
+                        let _ = socket.send(text(&error("malformed", format!("{e}")))).await;
                         if fatal {
                             break;
                         }
@@ -200,7 +263,7 @@ async fn run_link(socket: WebSocket, app: AppState) {
             },
         }
     }
-    let _ = sink.close().await;
+    let _ = socket.close().await;
     let _ = app.requests.send(Request::Gone { id, link }).await;
 }
 
@@ -241,6 +304,37 @@ async fn run_stream(socket: WebSocket, app: AppState) {
                 Some(Ok(Message::Close(_))) | None | Some(Err(_)) => break,
                 _ => {}
             },
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The pose fast path reads every frame exactly as the protocol's
+    /// tagged enum does: the same pose, or an error where it errs.
+    #[test]
+    fn the_pose_fast_path_agrees_with_the_protocol_type() {
+        let frames = [
+            r#"{"type":"pose","t":1,"x":2.5,"y":-3,"psi":0.1,"u":1,"v":0,"r":0}"#,
+            r#"{"x":2.5,"type":"pose","t":1,"y":-3,"psi":0.1,"u":1,"v":0,"r":0,"extra":[1,2]}"#,
+            r#"{"type":"pose","t":1,"x":2,"y":3,"psi":0,"u":0,"v":0,"r":0,"telemetry":{"d":[1,2,3]}}"#,
+            r#"{"type":"pose","t":1,"x":2,"y":3,"psi":0,"u":0,"v":0,"r":0,"telemetry":null}"#,
+            r#"{"type":"pose","t":1,"x":2,"y":3,"psi":0,"u":0,"v":0}"#,
+            r#"{"type":"pose","t":1,"x":"2","y":3,"psi":0,"u":0,"v":0,"r":0}"#,
+            r#"{"type":"pose","type":"pose","t":1,"x":2,"y":3,"psi":0,"u":0,"v":0,"r":0}"#,
+            r#"{"type":"Pose","t":1,"x":2,"y":3,"psi":0,"u":0,"v":0,"r":0}"#,
+            r#"{"t":1,"x":2,"y":3,"psi":0,"u":0,"v":0,"r":0}"#,
+            r#"{"type":"hello","vessel":"usv-1","protocol":1}"#,
+            r#"{"type":"pose","t":1,"x":2,"y":3,"psi":0,"u":0,"v":0,"r":0"#,
+            "[]",
+            "",
+        ];
+        for frame in frames {
+            let fast = parse(frame).map_err(|e| e.to_string());
+            let full = serde_json::from_str::<VesselMessage>(frame).map_err(|e| e.to_string());
+            assert_eq!(fast, full, "{frame}");
         }
     }
 }
