@@ -1044,6 +1044,37 @@ mod tests {
         .unwrap()
     }
 
+    /// Asserts that a tick's cells and H are `evaluate`'s for the vessels
+    /// at `states` with the mission's actuator.
+    fn assert_is_the_evaluation(mission: &Mission, states: &[State], eval: &Evaluation) {
+        let fleet = Fleet::new(
+            states
+                .iter()
+                .map(|s| Vessel {
+                    position: Point { x: s.x, y: s.y },
+                    k: mission.actuator.k,
+                    beta: mission.actuator.beta,
+                })
+                .collect(),
+        )
+        .unwrap();
+        assert_eq!(
+            eval,
+            &evaluate(&mission.region, &mission.risk, &fleet, &Options::default())
+        );
+    }
+
+    /// The command waiting on a link's queue (`what` names it in failures).
+    fn command(rx: &mut mpsc::Receiver<Outgoing>, what: &str) -> CommandDocument {
+        let Ok(Outgoing::Command { text, .. }) = rx.try_recv() else {
+            panic!("{what}: no command");
+        };
+        let Ok(CoordinatorMessage::Command(got)) = serde_json::from_str(&text) else {
+            panic!("{what}: not a command: {text}");
+        };
+        got
+    }
+
     /// The tick's commands are exactly the safety layer's for the same poses
     /// and cells (the function `seacover sim` calls), over several ticks, and
     /// two vessels closing head on inside the safety distance make the
@@ -1088,32 +1119,13 @@ mod tests {
             let published = c.on_tick(1, std::time::Instant::now(), written_tx);
             let eval = published.evaluation.as_ref().unwrap();
             // The pipelined tick's cells and H are the evaluation's.
-            let fleet = Fleet::new(
-                states
-                    .iter()
-                    .map(|s| Vessel {
-                        position: Point { x: s.x, y: s.y },
-                        k: mission.actuator.k,
-                        beta: mission.actuator.beta,
-                    })
-                    .collect(),
-            )
-            .unwrap();
-            assert_eq!(
-                eval,
-                &evaluate(&mission.region, &mission.risk, &fleet, &Options::default())
-            );
+            assert_is_the_evaluation(&mission, &states, eval);
             let expected = mission
                 .layer
                 .commands(published.time, &states, &eval.cells, &mut local);
             intervened += expected.iter().filter(|s| s.intervened).count();
             for ((_, rx), want) in links.iter_mut().zip(&expected) {
-                let Ok(Outgoing::Command { text, .. }) = rx.try_recv() else {
-                    panic!("tick {tick}: no command");
-                };
-                let Ok(CoordinatorMessage::Command(got)) = serde_json::from_str(&text) else {
-                    panic!("tick {tick}: not a command: {text}");
-                };
+                let got = command(rx, &format!("tick {tick}"));
                 assert_eq!(got.tick, tick + 1);
                 assert_eq!(
                     (got.u_d, got.r_d, got.e),
@@ -1167,32 +1179,13 @@ mod tests {
         let (written_tx, _written) = mpsc::channel(1);
         let published = c.on_tick(1, std::time::Instant::now(), written_tx);
         let eval = published.evaluation.as_ref().unwrap();
-        let fleet = Fleet::new(
-            states
-                .iter()
-                .map(|s| Vessel {
-                    position: Point { x: s.x, y: s.y },
-                    k: mission.actuator.k,
-                    beta: mission.actuator.beta,
-                })
-                .collect(),
-        )
-        .unwrap();
-        assert_eq!(
-            eval,
-            &evaluate(&mission.region, &mission.risk, &fleet, &Options::default())
-        );
+        assert_is_the_evaluation(&mission, &states, eval);
         let mut local: Vec<Guidance> = (0..n).map(|_| Guidance::new(mission.guidance)).collect();
         let expected = mission
             .layer
             .commands(published.time, &states, &eval.cells, &mut local);
         for (i, ((_, rx), want)) in links.iter_mut().zip(&expected).enumerate() {
-            let Ok(Outgoing::Command { text, .. }) = rx.try_recv() else {
-                panic!("vessel {i}: no command");
-            };
-            let Ok(CoordinatorMessage::Command(got)) = serde_json::from_str(&text) else {
-                panic!("vessel {i}: not a command: {text}");
-            };
+            let got = command(rx, &format!("vessel {i}"));
             assert_eq!(
                 (got.u_d, got.r_d, got.e, got.centroid),
                 (
