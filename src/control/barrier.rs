@@ -197,15 +197,9 @@ pub fn filter(barrier: &Barrier, shore: &Shore, fleet: &[Desire]) -> Vec<Safe> {
 
 /// [`filter`], on every core or on this thread.
 fn filter_with(barrier: &Barrier, shore: &Shore, fleet: &[Desire], parallel: bool) -> Vec<Safe> {
-    let traffic = Traffic::new(
-        barrier,
-        shore,
-        fleet
-            .iter()
-            .map(|d| (d.position, d.actual, d.max_speed, d.turn_rate)),
-    );
+    let traffic = Traffic::new(barrier, shore, fleet.iter().map(|d| d.mover()).collect());
     crate::coverage::map_indexed(fleet.len(), parallel, |i, scratch| {
-        traffic.solve(i, fleet[i], scratch)
+        traffic.solve(i, fleet[i].velocity, scratch)
     })
 }
 
@@ -218,53 +212,80 @@ pub struct Scratch {
     constraints: Vec<HalfPlane>,
 }
 
-/// The fleet as one tick's filters see it: positions, actual ground
-/// velocities and the neighbour grid. Built once per tick; then each
-/// vessel's problem ([`Traffic::solve`]) reads only this and the vessel's
-/// own desire, so vessels are solved independently, in any order and on
-/// any thread, with the same result — which is what lets the coordinator
-/// send each command as soon as it is computed.
+/// A vessel as the filters see it before its desired velocity is known:
+/// everything in its [`Desire`] but the velocity.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Mover {
+    pub position: Point,
+    /// Its actual ground velocity.
+    pub actual: Point,
+    /// The unit vector of its heading.
+    pub bow: Point,
+    /// Its speed limit [m/s].
+    pub max_speed: f64,
+    /// The fastest it turns [rad/s].
+    pub turn_rate: f64,
+}
+
+impl Desire {
+    /// This desire without its velocity.
+    pub fn mover(&self) -> Mover {
+        Mover {
+            position: self.position,
+            actual: self.actual,
+            bow: self.bow,
+            max_speed: self.max_speed,
+            turn_rate: self.turn_rate,
+        }
+    }
+}
+
+/// The fleet as one tick's filters see it: every vessel's [`Mover`] and the
+/// neighbour grid. Built once per tick; then each vessel's problem
+/// ([`Traffic::solve`]) reads only this and the vessel's own desired
+/// velocity, so vessels are solved independently, in any order and on any
+/// thread, with the same result — which is what lets the coordinator send
+/// each command as soon as it is computed.
 #[derive(Debug)]
 pub struct Traffic<'a> {
     barrier: Barrier,
     shore: &'a Shore,
-    positions: Vec<Point>,
-    actual: Vec<Point>,
+    fleet: Vec<Mover>,
     grid: NeighbourGrid,
 }
 
 impl<'a> Traffic<'a> {
-    /// `fleet` yields every vessel's (position, actual ground velocity,
-    /// speed limit, turn rate), in fleet order.
-    pub fn new(
-        barrier: &Barrier,
-        shore: &'a Shore,
-        fleet: impl Iterator<Item = (Point, Point, f64, f64)>,
-    ) -> Traffic<'a> {
-        let (mut positions, mut actual) = (Vec::new(), Vec::new());
-        let (mut top, mut slowest_turn) = (0.0, f64::INFINITY);
-        for (position, velocity, max_speed, turn_rate) in fleet {
-            positions.push(position);
-            actual.push(velocity);
-            top = f64::max(top, max_speed);
-            slowest_turn = f64::min(slowest_turn, turn_rate);
-        }
+    /// `fleet` is every vessel, in fleet order.
+    pub fn new(barrier: &Barrier, shore: &'a Shore, fleet: Vec<Mover>) -> Traffic<'a> {
+        let top = fleet.iter().map(|m| m.max_speed).fold(0.0, f64::max);
+        let slowest_turn = fleet
+            .iter()
+            .map(|m| m.turn_rate)
+            .fold(f64::INFINITY, f64::min);
         let pair_radius = barrier.safety_distance + barrier.horizon(2.0 * top, slowest_turn);
+        let positions: Vec<Point> = fleet.iter().map(|m| m.position).collect();
         let grid = NeighbourGrid::new(&positions, pair_radius);
         Traffic {
             barrier: *barrier,
             shore,
-            positions,
-            actual,
+            fleet,
             grid,
         }
     }
 
-    /// Vessel `i`'s safe velocity and surge interval; `me` is its desire
-    /// (its position and actual velocity must be the ones given to
-    /// [`Traffic::new`]).
-    pub fn solve(&self, i: usize, me: Desire, scratch: &mut Scratch) -> Safe {
+    /// Vessel `i`'s safe velocity and surge interval, for its nominal
+    /// desired ground velocity `velocity`.
+    pub fn solve(&self, i: usize, velocity: Point, scratch: &mut Scratch) -> Safe {
         let barrier = &self.barrier;
+        let m = self.fleet[i];
+        let me = Desire {
+            position: m.position,
+            actual: m.actual,
+            velocity,
+            max_speed: m.max_speed,
+            turn_rate: m.turn_rate,
+            bow: m.bow,
+        };
         let Scratch {
             neighbours,
             shore_points,
@@ -278,7 +299,7 @@ impl<'a> Traffic<'a> {
             neighbours,
         );
         for &j in neighbours.iter() {
-            let d = self.positions[j] - p;
+            let d = self.fleet[j].position - p;
             let dist = norm2(d).sqrt();
             // n from j to i; coincident vessels part along x, the lower
             // index to the west, so that the pair still separates.
@@ -289,7 +310,7 @@ impl<'a> Traffic<'a> {
             } else {
                 Point { x: 1.0, y: 0.0 }
             };
-            let closing = -dot(n, me.actual - self.actual[j]);
+            let closing = -dot(n, me.actual - self.fleet[j].actual);
             let gap =
                 dist - barrier.safety_distance - barrier.prediction(n, &me) * closing.max(0.0);
             constraints.push(HalfPlane {

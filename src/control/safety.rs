@@ -59,7 +59,7 @@
 
 use std::borrow::{Borrow, BorrowMut};
 
-use super::barrier::{Barrier, Desire, Safe, Scratch, Traffic};
+use super::barrier::{Barrier, Mover, Safe, Scratch, Traffic};
 use super::guidance::{Command, Guidance, GuidanceMode};
 use super::model::State;
 use crate::coverage::goal::reachable_goal;
@@ -260,16 +260,24 @@ impl SafetyLayer {
             Traffic::new(
                 &self.params.barrier(),
                 &self.shore,
-                states.iter().zip(guidance).map(|(s, g)| {
-                    let gains = g.borrow().gains;
-                    let (vx, vy) = s.ground_velocity();
-                    (
-                        Point { x: s.x, y: s.y },
-                        Point { x: vx, y: vy },
-                        gains.max_speed,
-                        gains.max_yaw_rate,
-                    )
-                }),
+                states
+                    .iter()
+                    .zip(guidance)
+                    .map(|(s, g)| {
+                        let gains = g.borrow().gains;
+                        let (vx, vy) = s.ground_velocity();
+                        Mover {
+                            position: Point { x: s.x, y: s.y },
+                            actual: Point { x: vx, y: vy },
+                            bow: Point {
+                                x: s.psi.cos(),
+                                y: s.psi.sin(),
+                            },
+                            max_speed: gains.max_speed,
+                            turn_rate: gains.max_yaw_rate,
+                        }
+                    })
+                    .collect(),
             )
         });
         SafetyTick { t, traffic }
@@ -313,22 +321,7 @@ impl SafetyLayer {
             };
         }
         let Safe { velocity: w, surge } = match &tick.traffic {
-            Some(traffic) => {
-                let gains = guidance.gains;
-                let (vx, vy) = s.ground_velocity();
-                let me = Desire {
-                    position: p,
-                    actual: Point { x: vx, y: vy },
-                    velocity: nominal,
-                    max_speed: gains.max_speed,
-                    turn_rate: gains.max_yaw_rate,
-                    bow: Point {
-                        x: s.psi.cos(),
-                        y: s.psi.sin(),
-                    },
-                };
-                traffic.solve(i, me, scratch)
-            }
+            Some(traffic) => traffic.solve(i, nominal, scratch),
             None => Safe {
                 velocity: nominal,
                 surge: (f64::NEG_INFINITY, f64::INFINITY),
