@@ -227,24 +227,13 @@ impl SafetyLayer {
         debug_assert!(states.len() == cells.len() && cells.len() == guidance.len());
         let n = states.len().min(cells.len()).min(guidance.len());
         let tick = self.prepare(t, &states[..n], &guidance[..n]);
-        let one = |(i, g): (usize, &mut G), scratch: &mut Scratch| {
-            self.command(&tick, i, &states[i], &cells[i], g.borrow_mut(), scratch)
-        };
-        if n >= crate::coverage::PARALLEL_MIN {
-            use rayon::prelude::*;
-            guidance[..n]
-                .par_iter_mut()
-                .enumerate()
-                .map_init(Scratch::default, |scratch, item| one(item, scratch))
-                .collect()
-        } else {
-            let mut scratch = Scratch::default();
-            guidance[..n]
-                .iter_mut()
-                .enumerate()
-                .map(|item| one(item, &mut scratch))
-                .collect()
-        }
+        crate::coverage::map_each(
+            guidance[..n].iter_mut().collect(),
+            n >= crate::coverage::PARALLEL_MIN,
+            |i, g: &mut G, scratch: &mut Scratch| {
+                self.command(&tick, i, &states[i], &cells[i], g.borrow_mut(), scratch)
+            },
+        )
     }
 
     /// The fleet-wide part of a tick: what every vessel's filter reads of

@@ -54,24 +54,13 @@ pub struct Evaluation {
 /// Evaluates the coverage of `fleet` over `region` under `risk`.
 pub fn evaluate(region: &Region, risk: &RiskField, fleet: &Fleet, options: &Options) -> Evaluation {
     let geometries = power_cells_with(region, fleet, options.parallel);
-    let figures = |(geometry, vessel): (CellGeometry, &super::Vessel), near: &mut Vec<usize>| {
-        cell_figures(region, risk, vessel, fleet.beta(), geometry, options, near)
-    };
-    let cells: Vec<CellResult> = if options.parallel && fleet.len() >= super::PARALLEL_MIN {
-        use rayon::prelude::*;
-        geometries
-            .into_par_iter()
-            .zip(fleet.vessels().par_iter())
-            .map_init(Vec::new, |near, cell| figures(cell, near))
-            .collect()
-    } else {
-        let mut near = Vec::new();
-        geometries
-            .into_iter()
-            .zip(fleet.vessels())
-            .map(|cell| figures(cell, &mut near))
-            .collect()
-    };
+    let cells: Vec<CellResult> = super::map_each(
+        geometries.into_iter().zip(fleet.vessels()).collect(),
+        options.parallel && fleet.len() >= super::PARALLEL_MIN,
+        |_, (geometry, vessel), near: &mut Vec<usize>| {
+            cell_figures(region, risk, vessel, fleet.beta(), geometry, options, near)
+        },
+    );
     let h = cells.iter().map(|c| c.mass).sum();
     Evaluation { h, cells }
 }

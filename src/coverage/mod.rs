@@ -56,6 +56,34 @@ where
     }
 }
 
+/// `f(i, items[i])` for every item, in order, on every core (rayon) when
+/// `parallel`, else on this thread; [`map_indexed`] over owned items. Each
+/// worker gets its own scratch buffer (`B::default()`); the result is the
+/// same either way as long as `f` depends only on its arguments.
+pub fn map_each<T, R, B, F>(items: Vec<T>, parallel: bool, f: F) -> Vec<R>
+where
+    T: Send,
+    R: Send,
+    B: Default,
+    F: Fn(usize, T, &mut B) -> R + Sync,
+{
+    if parallel {
+        use rayon::prelude::*;
+        items
+            .into_par_iter()
+            .enumerate()
+            .map_init(B::default, |buffer, (i, item)| f(i, item, buffer))
+            .collect()
+    } else {
+        let mut buffer = B::default();
+        items
+            .into_iter()
+            .enumerate()
+            .map(|(i, item)| f(i, item, &mut buffer))
+            .collect()
+    }
+}
+
 /// Why inputs to the engine were rejected. Messages name the offending field
 /// with the path a scenario document uses (`vessels[3].k`).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -870,26 +870,11 @@ impl Coordinator {
             entry.last_command = Some(doc);
             (cell, sc.intervened)
         };
-        let done: Vec<(CellResult, bool)> = if parallel {
-            use rayon::prelude::*;
-            entries
-                .par_iter_mut()
-                .zip(geometries.into_par_iter())
-                .enumerate()
-                .map_init(
-                    || (Vec::new(), Scratch::default()),
-                    |scratch, (i, (entry, geometry))| one(i, entry, geometry, scratch),
-                )
-                .collect()
-        } else {
-            let mut scratch = (Vec::new(), Scratch::default());
-            entries
-                .iter_mut()
-                .zip(geometries)
-                .enumerate()
-                .map(|(i, (entry, geometry))| one(i, entry, geometry, &mut scratch))
-                .collect()
-        };
+        let done: Vec<(CellResult, bool)> = crate::coverage::map_each(
+            entries.into_iter().zip(geometries).collect(),
+            parallel,
+            |i, (entry, geometry), scratch| one(i, entry, geometry, scratch),
+        );
         let interventions = done.iter().filter(|(_, intervened)| *intervened).count();
         metrics::counter!(super::metrics::SAFETY_INTERVENTIONS).increment(interventions as u64);
         let cells: Vec<CellResult> = done.into_iter().map(|(cell, _)| cell).collect();
