@@ -997,6 +997,16 @@ mod tests {
     use super::*;
     use crate::control::Vec3;
 
+    /// A coordinator of `mission` in real time, with no store. (Its
+    /// snapshots go to no reader: publishing needs none.)
+    fn coordinator(mission: &Mission) -> Coordinator {
+        let settings = TickSettings {
+            time_warp: 1.0,
+            liveness: 3.0,
+        };
+        Coordinator::new(mission.clone(), settings, None).0
+    }
+
     /// Registers a vessel through the same request a link sends; returns
     /// its pose slot and command queue.
     fn register(
@@ -1067,11 +1077,7 @@ mod tests {
     #[test]
     fn tick_commands_are_the_safety_layers() {
         let mission = Mission::paper();
-        let settings = TickSettings {
-            time_warp: 1.0,
-            liveness: 3.0,
-        };
-        let (mut c, _snapshots) = Coordinator::new(mission.clone(), settings, None);
+        let mut c = coordinator(&mission);
         let starts = [
             ("usv-1", 40.0, 50.0, 0.0, 1.2),
             ("usv-2", 45.0, 50.0, std::f64::consts::PI, 1.2),
@@ -1137,11 +1143,7 @@ mod tests {
     #[test]
     fn a_large_fleets_parallel_tick_is_the_evaluation_and_the_safety_layer() {
         let mission = Mission::paper();
-        let settings = TickSettings {
-            time_warp: 1.0,
-            liveness: 3.0,
-        };
-        let (mut c, _snapshots) = Coordinator::new(mission.clone(), settings, None);
+        let mut c = coordinator(&mission);
         let n = 2 * crate::coverage::PARALLEL_MIN;
         // Ids in the coordinator's (id) order.
         let ids: Vec<String> = (0..n).map(|i| format!("usv-{i:03}")).collect();
