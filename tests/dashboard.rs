@@ -67,27 +67,40 @@ impl Drop for Driver {
     }
 }
 
+/// Starts chromedriver on a port it picks itself (`--port=0`) and reads
+/// the port from its banner: a port picked here and then freed for the
+/// driver could be taken by another test's listener in between.
 async fn start_driver(driver: &PathBuf) -> (Driver, u16) {
-    let port = std::net::TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port();
-    let child = Command::new(driver)
-        .arg(format!("--port={port}"))
-        .stdout(Stdio::null())
+    use std::io::{BufRead, BufReader};
+    let mut child = Command::new(driver)
+        .arg("--port=0")
+        .stdout(Stdio::piped())
         .stderr(Stdio::null())
         .spawn()
         .expect("chromedriver starts");
-    let deadline = Instant::now() + Duration::from_secs(20);
-    while tokio::net::TcpStream::connect(("127.0.0.1", port))
+    let stdout = child.stdout.take().expect("chromedriver's stdout");
+    let (port_tx, port_rx) = tokio::sync::oneshot::channel();
+    // Reads the banner, then drains the rest so that the driver never
+    // blocks on a full pipe.
+    std::thread::spawn(move || {
+        let mut port_tx = Some(port_tx);
+        for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+            let port = line
+                .strip_prefix("ChromeDriver was started successfully on port ")
+                .and_then(|rest| rest.trim_end_matches('.').parse::<u16>().ok());
+            if let Some(port) = port
+                && let Some(tx) = port_tx.take()
+            {
+                let _ = tx.send(port);
+            }
+        }
+    });
+    let driver = Driver(child);
+    let port = tokio::time::timeout(Duration::from_secs(20), port_rx)
         .await
-        .is_err()
-    {
-        assert!(Instant::now() < deadline, "chromedriver did not listen");
-        tokio::time::sleep(Duration::from_millis(100)).await;
-    }
-    (Driver(child), port)
+        .expect("chromedriver did not report its port within 20 s")
+        .expect("chromedriver exited before reporting its port");
+    (driver, port)
 }
 
 async fn open_browser(port: u16, chrome: &std::path::Path) -> Client {
