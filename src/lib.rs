@@ -7,13 +7,16 @@
 //! - [`protocol`]: the serde types of everything that crosses the wire or the
 //!   command line, and nothing else;
 //! - [`scenario`]: the shell that turns a scenario document into validated core
-//!   types and an evaluation back into its document.
+//!   types and an evaluation back into its document;
+//! - [`georef`]: WGS84 documents (GeoJSON, lat/lon) in and GeoJSON out,
+//!   through the mission's local plane;
 //! - [`load`]: `seacover bench load`, a load benchmark of a running coordinator.
 
 pub mod agent;
 pub mod control;
 pub mod coverage;
 pub mod geometry;
+pub mod georef;
 pub mod load;
 pub mod protocol;
 pub mod scenario;

@@ -681,17 +681,12 @@ async fn sleep_or(shutdown: &CancellationToken, d: Duration) -> bool {
 }
 
 fn ws_url(server: &str) -> Result<String, LoadError> {
-    let base = server.trim_end_matches('/');
-    let ws = if let Some(rest) = base.strip_prefix("http://") {
-        format!("ws://{rest}")
-    } else if let Some(rest) = base.strip_prefix("https://") {
-        format!("wss://{rest}")
-    } else {
-        return Err(LoadError::Config(format!(
+    match crate::agent::link::link_url(server) {
+        Some(url) if server.starts_with("http") => Ok(url),
+        _ => Err(LoadError::Config(format!(
             "--server must be an http:// URL, got {server:?}"
-        )));
-    };
-    Ok(format!("{ws}/api/v1/vessels/link"))
+        ))),
+    }
 }
 
 fn check(config: &LoadConfig) -> Result<(), LoadError> {
@@ -1094,6 +1089,7 @@ async fn handshake(id: &str, shared: &Shared) -> Result<Socket, String> {
         vessel: id.to_string(),
         protocol: 1,
         actuator: None,
+        astern: None,
     };
     socket
         .send(Message::text(
@@ -1246,6 +1242,7 @@ async fn run_link(
                     u,
                     v: 0.0,
                     r,
+                    controlled: None,
                     telemetry: None,
                 });
                 let text = serde_json::to_string(&pose).expect("serializes");

@@ -63,7 +63,8 @@ enum Command {
         #[arg(long)]
         config: Option<PathBuf>,
     },
-    /// Run simulated vessels, each on its own link to a coordinator.
+    /// Run simulated vessels, each on its own link to a coordinator; or,
+    /// with --mavlink, bridge real autopilots (ArduPilot boats) onto it.
     Agent {
         /// Coordinator base URL, e.g. http://127.0.0.1:8080.
         #[arg(long)]
@@ -85,6 +86,21 @@ enum Command {
         /// Bearer token of the coordinator.
         #[arg(long, env = "SEACOVER_TOKEN", hide_env_values = true)]
         token: Option<String>,
+        /// Bridge the autopilots on this MAVLink endpoint instead of
+        /// simulating vessels (repeatable): `tcpout:HOST:PORT`,
+        /// `udpin:ADDR:PORT`, `udpout:HOST:PORT`, `serial:DEVICE:BAUD`.
+        /// Each autopilot becomes the vessel `mav-<sysid>` (or --id when
+        /// there is exactly one). The mission must have an origin.
+        #[arg(long, value_name = "ENDPOINT", conflicts_with_all = ["vessels", "preset", "time_warp", "seed"])]
+        mavlink: Vec<String>,
+        /// With --mavlink: switch each vehicle to GUIDED and arm it, once,
+        /// at start (simulators and tests; otherwise the operator does).
+        #[arg(long, requires = "mavlink")]
+        arm: bool,
+        /// With --mavlink: the bridge's own MAVLink system id (a ground
+        /// station's; ArduPilot's SYSID_MYGCS is 255 by default).
+        #[arg(long, default_value_t = 255, requires = "mavlink")]
+        mavlink_sysid: u8,
     },
     /// Coordinator and eight simulated vessels on loopback, paper scenario.
     Demo {
@@ -232,12 +248,32 @@ fn main() -> ExitCode {
         } => report(runtime().block_on(serve(&bind, time_warp, token, data_dir, config))),
         Command::Agent {
             server,
+            mavlink,
+            arm,
+            mavlink_sysid,
+            id,
+            token,
+            ..
+        } if !mavlink.is_empty() => report(runtime().block_on(bridge(
+            seacover::agent::mavlink::BridgeConfig {
+                server,
+                endpoints: mavlink,
+                arm,
+                token,
+                id,
+                sysid: mavlink_sysid,
+                origin_poll: std::time::Duration::from_secs(2),
+            },
+        ))),
+        Command::Agent {
+            server,
             vessels,
             id,
             preset,
             time_warp,
             seed,
             token,
+            ..
         } => {
             report(runtime().block_on(agent(&server, vessels, id, &preset, time_warp, seed, token)))
         }
@@ -409,17 +445,21 @@ async fn serve(
 }
 
 fn link_url(server: &str) -> anyhow::Result<String> {
-    let base = server.trim_end_matches('/');
-    let ws = if let Some(rest) = base.strip_prefix("http://") {
-        format!("ws://{rest}")
-    } else if let Some(rest) = base.strip_prefix("https://") {
-        format!("wss://{rest}")
-    } else if base.starts_with("ws://") || base.starts_with("wss://") {
-        base.to_string()
-    } else {
-        anyhow::bail!("--server must be an http:// or ws:// URL, got {server:?}");
-    };
-    Ok(format!("{ws}/api/v1/vessels/link"))
+    seacover::agent::link::link_url(server)
+        .ok_or_else(|| anyhow::anyhow!("--server must be an http:// or ws:// URL, got {server:?}"))
+}
+
+async fn bridge(config: seacover::agent::mavlink::BridgeConfig) -> anyhow::Result<()> {
+    if let Some(id) = &config.id {
+        anyhow::ensure!(
+            seacover::scenario::valid_id(id),
+            "--id must match [A-Za-z0-9_.-]{{1,64}}"
+        );
+    }
+    let stop = tokio_util::sync::CancellationToken::new();
+    cancel_on_signal(stop.clone());
+    seacover::agent::mavlink::run(config, stop).await?;
+    Ok(())
 }
 
 async fn agent(

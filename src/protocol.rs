@@ -18,19 +18,37 @@ use utoipa::ToSchema;
 /// `[x, y]` in metres.
 pub type XY = [f64; 2];
 
-/// A scenario document (`examples/*.json`).
+/// A scenario document (`examples/*.json`), as `seacover evaluate` and
+/// `POST /api/v1/coverage/evaluate` read it. With an origin, its region may
+/// be GeoJSON and its risk objects and vessels may be placed by `lat` and
+/// `lon` instead of `x` and `y`; [`crate::scenario`] converts them to the
+/// local plane.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
 pub struct ScenarioDocument {
     /// A label; ignored by the engine.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub name: Option<String>,
+    /// The WGS84 origin of the document's local plane (East-North-Up: x
+    /// east, y north). Omitted: the server's mission origin, if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub origin: Option<OriginDocument>,
     /// Omitted: taken from the current mission (server) or rejected (CLI).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub region: Option<RegionDocument>,
+    pub region: Option<RegionInput>,
     /// Omitted: taken from the current mission (server) or rejected (CLI).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub risk: Option<RiskDocument>,
-    pub vessels: Vec<VesselDocument>,
+    pub risk: Option<RiskInput>,
+    pub vessels: Vec<VesselInput>,
+}
+
+/// A geographic origin, WGS84 degrees: the mission's local plane is the
+/// East-North-Up plane tangent to the ellipsoid there (x east, y north, m).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
+pub struct OriginDocument {
+    /// Latitude [deg], |lat| < 90.
+    pub lat: f64,
+    /// Longitude [deg], |lon| ≤ 180.
+    pub lon: f64,
 }
 
 /// The task region: a simple polygon with optional holes.
@@ -83,6 +101,279 @@ pub struct VesselDocument {
     /// Actuator decay [1/m²]; default 0.001, shared by every vessel.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub beta: Option<f64>,
+}
+
+/// A region as a client may give it: in the local plane, or as GeoJSON
+/// when there is an origin to place it.
+#[derive(Debug, Clone, PartialEq, Serialize, ToSchema, JsonSchema)]
+#[serde(untagged)]
+pub enum RegionInput {
+    Local(RegionDocument),
+    GeoJson(GeoJsonRegion),
+}
+
+/// GeoJSON (RFC 7946) for a region: a `Polygon`, or a `MultiPolygon` of
+/// one polygon, as a geometry, a `Feature` or a `FeatureCollection` of one
+/// `Feature`. Positions are `[lon, lat]` in WGS84 degrees (a third number,
+/// an altitude, is ignored); rings are closed; the first ring is the
+/// region's outline and the others are islands; either orientation.
+/// Needs an origin. Parsed by the `geojson` crate; which geometry it is,
+/// and its rings, are checked when it is placed (`invalid`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(transparent)]
+pub struct GeoJsonRegion(pub geojson::GeoJson);
+
+/// A risk object as a client may give it: at `x`, `y`, or at `lat`, `lon`
+/// when there is an origin; stored and answered with `x`, `y`.
+#[derive(Debug, Clone, PartialEq, Serialize, ToSchema, JsonSchema)]
+#[serde(untagged)]
+pub enum RiskObjectInput {
+    Local(RiskObjectDocument),
+    Geo(GeoRiskObjectDocument),
+}
+
+/// A risk object placed in WGS84 degrees.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
+pub struct GeoRiskObjectDocument {
+    /// `[A-Za-z0-9_.-]{1,64}`; the server assigns one when it is omitted.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub id: Option<String>,
+    /// Latitude [deg].
+    pub lat: f64,
+    /// Longitude [deg].
+    pub lon: f64,
+    pub alpha: f64,
+    /// Width σ > 0 [m].
+    pub sigma: f64,
+}
+
+/// A scenario's risk density, its objects placed either way.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
+pub struct RiskInput {
+    /// φ0 ≥ 0, the density everywhere in the region.
+    pub base: f64,
+    #[serde(default)]
+    pub objects: Vec<RiskObjectInput>,
+}
+
+/// A scenario's vessel at `x`, `y`, or at `lat`, `lon` when there is an
+/// origin.
+#[derive(Debug, Clone, PartialEq, Serialize, ToSchema, JsonSchema)]
+#[serde(untagged)]
+pub enum VesselInput {
+    Local(VesselDocument),
+    Geo(GeoVesselDocument),
+}
+
+/// A scenario's vessel placed in WGS84 degrees.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
+pub struct GeoVesselDocument {
+    /// `[A-Za-z0-9_.-]{1,64}`, unique in the document.
+    pub id: String,
+    /// Latitude [deg].
+    pub lat: f64,
+    /// Longitude [deg].
+    pub lon: f64,
+    /// Heading [rad], counter-clockwise from east like every heading of
+    /// the local plane.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub psi: Option<f64>,
+    /// Actuator strength; default 0.5.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub k: Option<f64>,
+    /// Actuator decay [1/m²]; default 0.001, shared by every vessel.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub beta: Option<f64>,
+}
+
+impl From<RegionDocument> for RegionInput {
+    fn from(doc: RegionDocument) -> Self {
+        RegionInput::Local(doc)
+    }
+}
+
+impl From<RiskObjectDocument> for RiskObjectInput {
+    fn from(doc: RiskObjectDocument) -> Self {
+        RiskObjectInput::Local(doc)
+    }
+}
+
+impl From<RiskDocument> for RiskInput {
+    fn from(doc: RiskDocument) -> Self {
+        RiskInput {
+            base: doc.base,
+            objects: doc.objects.into_iter().map(Into::into).collect(),
+        }
+    }
+}
+
+/// Which form an input object takes is decided by its keys, so that a
+/// mistake is reported against the form the client meant (`missing field
+/// `lon``) rather than as "no variant matched", and so that what serde
+/// accepts is what the schemas' `oneOf` accepts: an object with both
+/// complete positions, or both a region's `polygon` and a GeoJSON `type`,
+/// is refused; one complete position decides; an incomplete one is read
+/// as the form whose keys it has.
+mod choose {
+    use serde::de::{DeserializeOwned, Error};
+    use serde_json::{Map, Value};
+
+    fn has(map: &Map<String, Value>, key: &str) -> bool {
+        map.contains_key(key)
+    }
+
+    fn parse<T: DeserializeOwned, E: Error>(value: Value) -> Result<T, E> {
+        serde_json::from_value(value).map_err(E::custom)
+    }
+
+    /// `Ok(true)` for the geographic form (`lat`, `lon`), `Ok(false)` for
+    /// the local one (`x`, `y`).
+    pub fn geographic<E: Error>(value: &Value) -> Result<bool, E> {
+        let Value::Object(map) = value else {
+            return Ok(false);
+        };
+        let local = has(map, "x") && has(map, "y");
+        let geo = has(map, "lat") && has(map, "lon");
+        if local && geo {
+            return Err(E::custom(
+                "give the position as x and y or as lat and lon, not both",
+            ));
+        }
+        Ok(geo || (!local && (has(map, "lat") || has(map, "lon"))))
+    }
+
+    /// `Ok(true)` for GeoJSON (a `type` member).
+    pub fn geojson<E: Error>(value: &Value) -> Result<bool, E> {
+        let Value::Object(map) = value else {
+            return Ok(false);
+        };
+        if has(map, "type") && has(map, "polygon") {
+            return Err(E::custom(
+                "give the region as {polygon, holes} or as GeoJSON (with a type), not both",
+            ));
+        }
+        Ok(has(map, "type"))
+    }
+
+    pub fn either<L: DeserializeOwned, G: DeserializeOwned, T, E: Error>(
+        value: Value,
+        second: bool,
+        local: impl FnOnce(L) -> T,
+        geo: impl FnOnce(G) -> T,
+    ) -> Result<T, E> {
+        if second {
+            parse(value).map(geo)
+        } else {
+            parse(value).map(local)
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for RegionInput {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let value = serde_json::Value::deserialize(d)?;
+        let geojson = choose::geojson(&value)?;
+        choose::either(value, geojson, RegionInput::Local, RegionInput::GeoJson)
+    }
+}
+
+impl<'de> Deserialize<'de> for RiskObjectInput {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let value = serde_json::Value::deserialize(d)?;
+        let geo = choose::geographic(&value)?;
+        choose::either(value, geo, RiskObjectInput::Local, RiskObjectInput::Geo)
+    }
+}
+
+impl<'de> Deserialize<'de> for VesselInput {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let value = serde_json::Value::deserialize(d)?;
+        let geo = choose::geographic(&value)?;
+        choose::either(value, geo, VesselInput::Local, VesselInput::Geo)
+    }
+}
+
+/// The GeoJSON objects the `geojson` crate reads, by their members: the
+/// schema lets through what serde lets through, and which of them makes a
+/// region is checked when it is placed.
+const GEOJSON_GEOMETRIES: [&str; 6] = [
+    "Point",
+    "MultiPoint",
+    "LineString",
+    "MultiLineString",
+    "Polygon",
+    "MultiPolygon",
+];
+
+const GEOJSON_REGION: &str = "GeoJSON (RFC 7946) for a region: a `Polygon`, or a \
+`MultiPolygon` of one polygon, as a geometry, a `Feature` or a `FeatureCollection` of one \
+`Feature`. Positions are `[lon, lat]` in WGS84 degrees; rings are closed; the first ring is \
+the outline and the others are islands; either orientation. Needs an origin (the \
+mission's, or the scenario's `origin`). Other GeoJSON parses, and is refused as `invalid`.";
+
+impl utoipa::PartialSchema for GeoJsonRegion {
+    fn schema() -> utoipa::openapi::RefOr<utoipa::openapi::schema::Schema> {
+        use utoipa::openapi::schema::{ArrayBuilder, ObjectBuilder, OneOfBuilder, Type};
+        // One GeoJSON object type: `type` among `types`, with `member`
+        // (an array) required, when there is one.
+        let object = |types: &[&'static str], member: Option<&str>| {
+            let mut o = ObjectBuilder::new().schema_type(Type::Object).property(
+                "type",
+                ObjectBuilder::new()
+                    .schema_type(Type::String)
+                    .enum_values(Some(types.iter().copied())),
+            );
+            o = o.required("type");
+            if let Some(member) = member {
+                o = o.property(member, ArrayBuilder::new()).required(member);
+            }
+            o
+        };
+        OneOfBuilder::new()
+            .description(Some(GEOJSON_REGION))
+            .item(object(&GEOJSON_GEOMETRIES, Some("coordinates")))
+            .item(object(&["GeometryCollection"], Some("geometries")))
+            .item(
+                object(&["Feature"], None).property(
+                    "geometry",
+                    ObjectBuilder::new().schema_type(
+                        [Type::Object, Type::Null]
+                            .into_iter()
+                            .collect::<utoipa::openapi::schema::SchemaType>(),
+                    ),
+                ),
+            )
+            .item(object(&["FeatureCollection"], Some("features")))
+            .into()
+    }
+}
+
+impl ToSchema for GeoJsonRegion {}
+
+impl JsonSchema for GeoJsonRegion {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "GeoJsonRegion".into()
+    }
+
+    fn json_schema(_: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        schemars::json_schema!({
+            "description": GEOJSON_REGION,
+            "oneOf": [
+                {"type": "object", "required": ["type", "coordinates"], "properties": {
+                    "type": {"type": "string", "enum": GEOJSON_GEOMETRIES},
+                    "coordinates": {"type": "array"}}},
+                {"type": "object", "required": ["type", "geometries"], "properties": {
+                    "type": {"type": "string", "enum": ["GeometryCollection"]},
+                    "geometries": {"type": "array"}}},
+                {"type": "object", "required": ["type"], "properties": {
+                    "type": {"type": "string", "enum": ["Feature"]},
+                    "geometry": {"type": ["object", "null"]}}},
+                {"type": "object", "required": ["type", "features"], "properties": {
+                    "type": {"type": "string", "enum": ["FeatureCollection"]},
+                    "features": {"type": "array"}}},
+            ],
+        })
+    }
 }
 
 /// Result of `evaluate`: cells in the order of the request's vessels.
@@ -154,6 +445,12 @@ pub enum VesselMessage {
         /// Omitted: the mission's actuator.
         #[serde(default, skip_serializing_if = "Option::is_none")]
         actuator: Option<ActuatorDocument>,
+        /// Whether the vessel can thrust astern when a command asks for a
+        /// negative surge. Omitted: `true`. A vessel that cannot (an
+        /// ArduPilot boat driven by velocity setpoints takes only a speed)
+        /// is guided ahead only: it turns round rather than backing up.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        astern: Option<bool>,
     },
     /// A pose report.
     Pose(PoseDocument),
@@ -174,6 +471,12 @@ pub struct PoseDocument {
     pub v: f64,
     /// Yaw rate [rad/s].
     pub r: f64,
+    /// Whether the vessel follows the coordinator's commands: `false` when
+    /// an operator has taken it over (an autopilot out of GUIDED, or
+    /// disarmed). Omitted: `true`. A vessel not under control keeps its
+    /// place in the partition.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub controlled: Option<bool>,
     /// Free-form; the coordinator does not interpret it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub telemetry: Option<serde_json::Value>,
@@ -214,6 +517,11 @@ pub struct CommandDocument {
 /// `GET /api/v1/mission`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
 pub struct MissionDocument {
+    /// The WGS84 origin of the local plane; `null` when the mission is not
+    /// geo-referenced.
+    #[serde(default)]
+    #[schema(required = true)]
+    pub origin: Option<OriginDocument>,
     pub region: RegionDocument,
     pub risk: RiskDocument,
     pub actuator: ActuatorDocument,
@@ -273,6 +581,10 @@ pub struct VesselStatusDocument {
     pub connected: bool,
     /// Within the liveness timeout, hence in the partition.
     pub live: bool,
+    /// Following the coordinator's commands (the newest pose's
+    /// `controlled`, `true` when it has none); `false` while an operator
+    /// has taken the vessel over.
+    pub controlled: bool,
     /// The newest pose; `null` before the first.
     #[schema(required = true)]
     pub pose: Option<PoseDocument>,

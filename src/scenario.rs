@@ -15,8 +15,8 @@ use crate::coverage::{
 };
 use crate::geometry::{Point, Region};
 use crate::protocol::{
-    CellDocument, ErrorDetail, ErrorDocument, EvaluationDocument, RegionDocument, ScenarioDocument,
-    XY,
+    CellDocument, ErrorDetail, ErrorDocument, EvaluationDocument, OriginDocument, RegionDocument,
+    RiskDocument, ScenarioDocument, VesselDocument, XY,
 };
 
 /// Why a scenario was rejected.
@@ -69,9 +69,52 @@ pub fn valid_id(id: &str) -> bool {
             .all(|b| b.is_ascii_alphanumeric() || matches!(b, b'_' | b'.' | b'-'))
 }
 
-/// Parses a scenario document.
-pub fn parse_document(text: &str) -> Result<ScenarioDocument, ScenarioError> {
+/// A scenario in the local plane: the document with whatever it gave in
+/// WGS84 placed in the plane of its origin (see [`crate::georef::input`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LocalScenario {
+    pub region: Option<RegionDocument>,
+    pub risk: Option<RiskDocument>,
+    pub vessels: Vec<VesselDocument>,
+}
+
+/// Parses a scenario document as written, without placing it.
+pub fn parse_input(text: &str) -> Result<ScenarioDocument, ScenarioError> {
     serde_json::from_str(text).map_err(|e| ScenarioError::Malformed(e.to_string()))
+}
+
+/// Parses a scenario document and places it in the plane of its own origin.
+pub fn parse_document(text: &str) -> Result<LocalScenario, ScenarioError> {
+    localize(&parse_input(text)?, None)
+}
+
+/// Places a document's geographic parts in the plane of its origin, or of
+/// `fallback` when it has none (the server's mission origin).
+pub fn localize(
+    doc: &ScenarioDocument,
+    fallback: Option<OriginDocument>,
+) -> Result<LocalScenario, ScenarioError> {
+    use crate::georef::input;
+    let frame = input::frame(doc.origin.or(fallback))?;
+    let frame = frame.as_ref();
+    Ok(LocalScenario {
+        region: doc
+            .region
+            .as_ref()
+            .map(|r| input::region(r, frame))
+            .transpose()?,
+        risk: doc
+            .risk
+            .as_ref()
+            .map(|r| input::risk(r, frame))
+            .transpose()?,
+        vessels: doc
+            .vessels
+            .iter()
+            .enumerate()
+            .map(|(i, v)| input::vessel(v, frame, &format!("vessels[{i}]")))
+            .collect::<Result<_, _>>()?,
+    })
 }
 
 fn points(ring: &[XY]) -> Vec<Point> {
@@ -89,7 +132,7 @@ pub fn region_from_document(doc: &RegionDocument) -> Result<Region, ScenarioErro
 
 impl Scenario {
     /// Validates a document; `region` and `risk` must be present.
-    pub fn from_document(doc: &ScenarioDocument) -> Result<Self, ScenarioError> {
+    pub fn from_document(doc: &LocalScenario) -> Result<Self, ScenarioError> {
         let region_doc = doc
             .region
             .as_ref()

@@ -126,6 +126,7 @@ fn the_documents_cover_every_endpoint_of_the_spec() {
         ("/metrics", &["get"]),
         ("/api/v1/openapi.json", &["get"]),
         ("/api/v1/mission", &["get"]),
+        ("/api/v1/mission/origin", &["put"]),
         ("/api/v1/mission/region", &["put"]),
         ("/api/v1/mission/risk/base", &["put"]),
         ("/api/v1/risk-objects", &["get", "post"]),
@@ -134,6 +135,7 @@ fn the_documents_cover_every_endpoint_of_the_spec() {
         ("/api/v1/vessels/{id}", &["get", "delete"]),
         ("/api/v1/vessels/link", &["get"]),
         ("/api/v1/coverage", &["get"]),
+        ("/api/v1/coverage.geojson", &["get"]),
         ("/api/v1/coverage/evaluate", &["post"]),
         ("/api/v1/stream", &["get"]),
     ];
@@ -182,6 +184,7 @@ fn pose() -> PoseDocument {
         u: 0.4,
         v: -0.01,
         r: 0.02,
+        controlled: None,
         telemetry: None,
     }
 }
@@ -196,6 +199,7 @@ fn the_link_schema_accepts_the_real_messages() {
             vessel: "usv-1".into(),
             protocol: 1,
             actuator: None,
+            astern: None,
         },
         VesselMessage::Hello {
             vessel: "usv-2".into(),
@@ -204,10 +208,16 @@ fn the_link_schema_accepts_the_real_messages() {
                 k: 0.5,
                 beta: 0.001,
             }),
+            astern: Some(false),
         },
         VesselMessage::Pose(pose()),
         VesselMessage::Pose(PoseDocument {
             telemetry: Some(json!({"battery": 0.93, "thrusters": [1.5, -0.2], "fault": null})),
+            ..pose()
+        }),
+        VesselMessage::Pose(PoseDocument {
+            controlled: Some(false),
+            telemetry: Some(json!({"mode": "HOLD", "armed": true})),
             ..pose()
         }),
     ];
@@ -286,10 +296,15 @@ fn the_link_schema_agrees_with_serde_on_edge_cases() {
 /// serde accepts.
 #[test]
 fn the_openapi_request_schemas_agree_with_serde() {
-    use seacover::protocol::{RegionDocument, RiskObjectDocument, ScenarioDocument};
+    use seacover::protocol::{
+        RegionDocument, RegionInput, RiskObjectDocument, RiskObjectInput, ScenarioDocument,
+    };
     let doc = openapi_document();
     let square = json!([[0, 0], [10, 0], [10, 10], [0, 10]]);
     let vessel = json!({"id": "a", "x": 1, "y": 2});
+    let geo_vessel = json!({"id": "b", "lat": 1.001, "lon": 2});
+    let geojson =
+        json!({"type": "Polygon", "coordinates": [[[2, 1], [2.001, 1], [2, 1.001], [2, 1]]]});
     let scenarios = [
         json!({"vessels": [vessel]}),
         json!({"name": "n", "region": {"polygon": square}, "risk": {"base": 0.1}, "vessels": []}),
@@ -306,6 +321,19 @@ fn the_openapi_request_schemas_agree_with_serde() {
         json!({"vessels": [{"id": 7, "x": 1, "y": 2}]}),
         json!({"vessels": [{"x": 1, "y": 2}]}),
         json!({"vessels": {}}),
+        // Geo-referenced: GeoJSON regions, objects and vessels at lat, lon.
+        json!({"origin": {"lat": 1, "lon": 2}, "region": geojson, "vessels": [geo_vessel]}),
+        json!({"origin": {"lat": 1}, "vessels": []}),
+        json!({"region": {"type": "Feature", "geometry": null, "properties": {}}, "vessels": []}),
+        json!({"region": {"type": "Polygon"}, "vessels": []}),
+        json!({"region": {"type": "Polygon", "coordinates": [[[1, 2], [3, 4]]], "polygon": square}, "vessels": []}),
+        json!({"risk": {"base": 1, "objects": [{"lat": 1, "lon": 2, "alpha": 1, "sigma": 1}]}, "vessels": []}),
+        json!({"risk": {"base": 1, "objects": [{"lat": 1, "alpha": 1, "sigma": 1}]}, "vessels": []}),
+        json!({"vessels": [{"id": "a", "lat": 1, "lon": 2, "psi": 0.5}]}),
+        json!({"vessels": [{"id": "a", "x": 1, "y": 2, "lat": 1, "lon": 2}]}),
+        json!({"vessels": [{"id": "a", "x": 1, "y": 2, "lat": 1}]}),
+        json!({"vessels": [{"id": "a", "x": 1, "lat": 1, "lon": 2}]}),
+        json!({"vessels": [{"id": "a", "lat": "1", "lon": 2}]}),
     ];
     let schema = component(&doc, "ScenarioDocument");
     for case in scenarios {
@@ -331,8 +359,41 @@ fn the_openapi_request_schemas_agree_with_serde() {
         json!({"polygon": [[1, 2], [3]]}),
     ];
     let schema = component(&doc, "RegionDocument");
-    for case in regions {
+    for case in &regions {
         let serde_accepts = serde_json::from_value::<RegionDocument>(case.clone()).is_ok();
+        assert_eq!(errors(&schema, case).is_empty(), serde_accepts, "{case}");
+    }
+    // What PUT /api/v1/mission/region reads: those, or GeoJSON.
+    let inputs = regions.iter().cloned().chain([
+        geojson.clone(),
+        json!({"type": "Feature", "properties": {"name": "bay"}, "geometry": geojson}),
+        json!({"type": "FeatureCollection", "features": []}),
+        json!({"type": "LineString", "coordinates": [[1, 2], [3, 4]]}),
+        json!({"type": "Polygon"}),
+        json!({"type": "Polygon", "coordinates": [[[1, 2], [3, 4]]], "polygon": square}),
+        json!({"type": "Circle", "coordinates": [1, 2]}),
+        json!({"type": 7}),
+    ]);
+    let schema = component(&doc, "RegionInput");
+    for case in inputs {
+        let serde_accepts = serde_json::from_value::<RegionInput>(case.clone()).is_ok();
+        assert_eq!(errors(&schema, &case).is_empty(), serde_accepts, "{case}");
+    }
+    // What the risk-object writes read: at x, y or at lat, lon.
+    let objects = [
+        json!({"x": 1, "y": 2, "alpha": 3, "sigma": 4}),
+        json!({"id": "o", "lat": 1, "lon": 2, "alpha": 3, "sigma": 4}),
+        json!({"lat": 1, "lon": 2, "alpha": 3}),
+        json!({"lat": 1, "alpha": 3, "sigma": 4}),
+        json!({"x": 1, "y": 2, "lat": 1, "lon": 2, "alpha": 3, "sigma": 4}),
+        json!({"x": 1, "y": 2, "lat": 1, "alpha": 3, "sigma": 4}),
+        json!({"x": 1, "lat": 1, "lon": 2, "alpha": 3, "sigma": 4}),
+        json!({"lat": "1", "lon": 2, "alpha": 3, "sigma": 4}),
+        json!([1, 2]),
+    ];
+    let schema = component(&doc, "RiskObjectInput");
+    for case in objects {
+        let serde_accepts = serde_json::from_value::<RiskObjectInput>(case.clone()).is_ok();
         assert_eq!(errors(&schema, &case).is_empty(), serde_accepts, "{case}");
     }
 }
@@ -545,6 +606,60 @@ async fn the_real_server_speaks_as_documented() {
     assert_eq!(response.status(), 200);
     let mission: Value = response.json().await.unwrap();
     assert_valid(&component(&doc, "MissionDocument"), &mission);
+
+    // Geo-referenced writes: the origin, a GeoJSON region and an object at
+    // lat, lon, each body valid against its operation's request schema and
+    // each answer against its response's.
+    let origin = json!({"lat": -35.363261, "lon": 149.16523});
+    assert_valid(&component(&doc, "OriginDocument"), &origin);
+    let response = client
+        .put(server.url("/api/v1/mission/origin"))
+        .json(&origin)
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(response.status(), 200);
+    let mission: Value = response.json().await.unwrap();
+    assert_valid(&component(&doc, "MissionDocument"), &mission);
+    assert_eq!(mission["origin"], origin);
+    let ring = json!([
+        [149.16523, -35.363261],
+        [149.1664, -35.363261],
+        [149.1664, -35.3623],
+        [149.16523, -35.3623],
+        [149.16523, -35.363261]
+    ]);
+    let region = json!({"type": "Feature", "properties": {"name": "bay"},
+                        "geometry": {"type": "Polygon", "coordinates": [ring]}});
+    assert_valid(&component(&doc, "RegionInput"), &region);
+    let response = client
+        .put(server.url("/api/v1/mission/region"))
+        .json(&region)
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(response.status(), 200);
+    let mission: Value = response.json().await.unwrap();
+    assert_valid(&component(&doc, "MissionDocument"), &mission);
+    let object = json!({"lat": -35.3628, "lon": 149.1658, "alpha": 3, "sigma": 5});
+    assert_valid(&component(&doc, "RiskObjectInput"), &object);
+    let response = client
+        .post(server.url("/api/v1/risk-objects"))
+        .json(&object)
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(response.status(), 201);
+    let stored: Value = response.json().await.unwrap();
+    assert_valid(&component(&doc, "RiskObjectDocument"), &stored);
+    let response = reqwest::get(server.url("/api/v1/coverage.geojson"))
+        .await
+        .unwrap();
+    assert_eq!(response.status(), 200);
+    assert_eq!(
+        response.headers()["content-type"].to_str().unwrap(),
+        "application/geo+json"
+    );
 
     drop(sink);
     server.stop().await;

@@ -1,6 +1,8 @@
 //! `seacover evaluate` as a user runs it: the real binary, a file or stdin, and
 //! the exit status and streams it produces.
 
+mod common;
+
 use std::io::Write;
 use std::process::{Command, Output, Stdio};
 
@@ -231,4 +233,137 @@ fn unreadable_file_and_bad_flags_exit_2() {
     assert_eq!(v["error"]["code"], "io");
     let out = run(&["evaluate", "--tolerance", "0"], &paper().to_string());
     assert_eq!(out.status.code(), Some(2));
+}
+
+fn harbour() -> Value {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/harbour.json");
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+/// Bergen's harbour: a mid-latitude origin where a degree of longitude is
+/// half a degree of latitude.
+const BERGEN: common::geo::Origin = (60.3913, 5.3221);
+
+/// The harbour scenario given in WGS84 (placed by geographiclib): the
+/// region as a GeoJSON Feature whose interior rings are the islands, the
+/// risk objects and vessels at lat, lon.
+fn geo_harbour() -> Value {
+    use common::geo::{at_lat_lon, polygon};
+    let local = harbour();
+    let mut geo = local.clone();
+    geo["origin"] = json!({"lat": BERGEN.0, "lon": BERGEN.1});
+    geo["region"] = json!({
+        "type": "Feature",
+        "properties": {"name": "harbour"},
+        "geometry": polygon(BERGEN, &local["region"]),
+    });
+    for o in geo["risk"]["objects"].as_array_mut().unwrap() {
+        *o = at_lat_lon(BERGEN, o);
+    }
+    for v in geo["vessels"].as_array_mut().unwrap() {
+        *v = at_lat_lon(BERGEN, v);
+    }
+    geo
+}
+
+#[test]
+fn a_geo_referenced_scenario_evaluates_as_its_local_twin() {
+    let evaluate = |doc: &Value| -> Value {
+        let out = run(&["evaluate"], &doc.to_string());
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        serde_json::from_slice(&out.stdout).unwrap()
+    };
+    let local = evaluate(&harbour());
+    let geo = evaluate(&geo_harbour());
+    // The two placements differ by the plane's distortion over 250 m,
+    // s³/(6R²) < 0.1 µm (tests/geodesy.rs), so the figures agree to that;
+    // areas to 1e-8, since the clipping itself moves cell vertices by
+    // about 1e-7 m either way.
+    let h = |v: &Value| v["H"].as_f64().unwrap();
+    assert!(
+        ((h(&geo) - h(&local)) / h(&local)).abs() < 1e-9,
+        "H {} vs {}",
+        h(&geo),
+        h(&local)
+    );
+    let (cells, twins) = (
+        local["cells"].as_array().unwrap(),
+        geo["cells"].as_array().unwrap(),
+    );
+    assert_eq!(cells.len(), 30);
+    for (a, b) in cells.iter().zip(twins) {
+        assert_eq!(a["id"], b["id"]);
+        let f = |v: &Value, k: &str| v[k].as_f64().unwrap();
+        assert!(
+            (f(a, "mass") - f(b, "mass")).abs() <= 1e-8 * f(a, "mass").max(1.0),
+            "{a} {b}"
+        );
+        assert!(
+            (f(a, "area") - f(b, "area")).abs() <= 1e-8 * f(a, "area"),
+            "{a} {b}"
+        );
+        for k in 0..2 {
+            let (p, q) = (
+                a["centroid"][k].as_f64().unwrap(),
+                b["centroid"][k].as_f64().unwrap(),
+            );
+            assert!((p - q).abs() < 1e-6, "{}: centroid {a} {b}", a["id"]);
+        }
+    }
+}
+
+#[test]
+fn geo_referenced_mistakes_name_the_field() {
+    // No origin: the region, an object or a vessel in WGS84 names it.
+    for edit in ["region", "risk", "vessels"] {
+        let doc = with(geo_harbour(), |d| {
+            d.as_object_mut().unwrap().remove("origin");
+            let local = harbour();
+            for other in ["region", "risk", "vessels"] {
+                if other != edit {
+                    d[other] = local[other].clone();
+                }
+            }
+        });
+        let (code, msg) = rejected(&doc);
+        assert_eq!(code, "invalid", "{msg}");
+        assert!(msg.starts_with("origin: "), "{edit}: {msg}");
+    }
+    // An origin off the globe.
+    let (code, msg) = rejected(&with(geo_harbour(), |d| d["origin"]["lat"] = json!(91)));
+    assert_eq!(code, "invalid");
+    assert!(msg.starts_with("origin.lat"), "{msg}");
+    // A ring that does not close, named by its path in the GeoJSON.
+    let (code, msg) = rejected(&with(geo_harbour(), |d| {
+        d["region"]["geometry"]["coordinates"][2]
+            .as_array_mut()
+            .unwrap()
+            .pop();
+    }));
+    assert_eq!(code, "invalid");
+    assert!(
+        msg.starts_with("region.geometry.coordinates[2][3]"),
+        "{msg}"
+    );
+    // A vessel 0.72° north, past the plane's 50 km: 0.72° of the meridian
+    // at 60.4° N, M(60.4°) = 6383.9 km, is 80.2 km.
+    let (code, msg) = rejected(&with(geo_harbour(), |d| {
+        d["vessels"][4]["lat"] = json!(BERGEN.0 + 0.72)
+    }));
+    assert_eq!(code, "invalid");
+    assert!(
+        msg.starts_with("vessels[4].lat") && msg.contains("80.2 km"),
+        "{msg}"
+    );
+    // Both positions at once is not a shape either form has.
+    let (code, msg) = rejected(&with(geo_harbour(), |d| {
+        d["vessels"][0]["x"] = json!(1);
+        d["vessels"][0]["y"] = json!(1)
+    }));
+    assert_eq!(code, "malformed");
+    assert!(msg.contains("not both"), "{msg}");
 }

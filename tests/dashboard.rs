@@ -6,6 +6,8 @@
 //! Without chromium and chromedriver the test says so and passes, except
 //! under `CI=true`, where it fails: CI installs them (`scripts/test`).
 
+mod common;
+
 use std::net::SocketAddr;
 use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
@@ -298,6 +300,38 @@ async fn the_dashboard_shows_the_fleet_and_edits_risk() {
         .unwrap();
     let expected: Vec<String> = (1..=8).map(|i| format!("usv-{i}")).collect();
     assert_eq!(ids, json!(expected));
+
+    // A vessel an operator has taken over (what the MAVLink bridge reports
+    // for a boat out of GUIDED) is marked in the table.
+    {
+        use futures_util::SinkExt;
+        use tokio_tungstenite::tungstenite::{Message, client::IntoClientRequest};
+        let mut request = format!("ws://{addr}/api/v1/vessels/link")
+            .into_client_request()
+            .unwrap();
+        request
+            .headers_mut()
+            .insert("authorization", format!("Bearer {TOKEN}").parse().unwrap());
+        let (mut link, _) = tokio_tungstenite::connect_async(request).await.unwrap();
+        let hello = json!({"type": "hello", "vessel": "boat-9", "protocol": 1, "astern": false});
+        link.send(Message::text(hello.to_string())).await.unwrap();
+        for k in 0..40 {
+            let pose = json!({"type": "pose", "t": f64::from(k) * 0.05, "x": 20, "y": 80, "psi": 0,
+                "u": 0, "v": 0, "r": 0, "controlled": false, "telemetry": {"mode": "HOLD"}});
+            link.send(Message::text(pose.to_string())).await.unwrap();
+            if k == 0 {
+                until(
+                    &client,
+                    "the taken-over vessel marked",
+                    "(() => { const r = document.querySelector(\"#vessels tr[data-vessel-id='boat-9']\");
+                              return r && r.cells[1].textContent.includes('operator (HOLD)')
+                                     && r.cells[1].className === 'operator'; })()",
+                )
+                .await;
+            }
+        }
+        link.close(None).await.unwrap();
+    }
     until(
         &client,
         "cells on the map",
@@ -568,5 +602,205 @@ async fn the_dashboard_keeps_up_with_a_thousand_vessels() {
     client.close().await.unwrap();
     stop.cancel();
     let _ = fleet.await.unwrap();
+    server.await.unwrap().unwrap();
+}
+
+/// With a WGS84 origin the map becomes a chart: the pointer's latitude and
+/// longitude, a scale bar and a north arrow, each checked against an
+/// independent computation (geographiclib for positions and north, the
+/// view's own scale for the bar).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_dashboard_places_the_map_on_the_globe() {
+    use common::geo::{locate, place};
+    use geographiclib_rs::{DirectGeodesic, Geodesic};
+    let Some((driver_path, chrome)) = browser_or_skip() else {
+        return;
+    };
+    // ArduPilot SITL's home, Canberra.
+    let origin = (-35.363261, 149.16523);
+    let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let addr = listener.local_addr().unwrap();
+    let stop = CancellationToken::new();
+    let server = tokio::spawn(serve(listener, ServeConfig::default(), stop.clone()));
+    let (_driver, port) = start_driver(&driver_path).await;
+    let client = open_browser(port, &chrome).await;
+    client.goto(&format!("http://{addr}/")).await.unwrap();
+    until(
+        &client,
+        "the first snapshot",
+        "window.seacover && window.seacover.state.snapshot",
+    )
+    .await;
+    let shown = "['geo-readout', 'scale-bar', 'north-arrow'].map(id => document.getElementById(id).offsetParent !== null)";
+    let none = client
+        .execute(&format!("return {shown};"), vec![])
+        .await
+        .unwrap();
+    assert_eq!(
+        none,
+        json!([false, false, false]),
+        "a chart without an origin"
+    );
+
+    // Setting the origin over REST brings them onto the open page.
+    let response = reqwest::Client::new()
+        .put(format!("http://{addr}/api/v1/mission/origin"))
+        .json(&json!({"lat": origin.0, "lon": origin.1}))
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(response.status(), 200);
+    until(
+        &client,
+        "the readout, the scale bar and the north arrow",
+        &format!("{shown}.every(v => v)"),
+    )
+    .await;
+
+    // The scale bar: a 1, 2 or 5 × 10^k length, as long on screen as the
+    // view's scale makes it.
+    let bar = client
+        .execute(
+            "const b = document.getElementById('scale-bar');
+             return [Number(b.dataset.metres), b.querySelector('.bar').getBoundingClientRect().width,
+                     window.seacover.view.scale, b.querySelector('.label').textContent];",
+            vec![],
+        )
+        .await
+        .unwrap();
+    let (length, width, scale) = (
+        bar[0].as_f64().unwrap(),
+        bar[1].as_f64().unwrap(),
+        bar[2].as_f64().unwrap(),
+    );
+    let decade = 10f64.powf(length.log10().floor());
+    assert!(
+        [1.0, 2.0, 5.0]
+            .iter()
+            .any(|m| (length - m * decade).abs() < 1e-9 * decade),
+        "a scale bar of {length} m"
+    );
+    assert!(
+        (width - length * scale).abs() < 1.0,
+        "{length} m drawn {width} px wide at {scale} px/m"
+    );
+    // About 120 px rounded down to 1, 2 or 5: never less than 2/5 of it.
+    assert!(
+        (47.9..=120.1).contains(&width),
+        "a scale bar {width} px wide"
+    );
+    assert_eq!(bar[3], json!(format!("{length} m")));
+
+    // The pointer over a known point of the map: the readout is where
+    // geographiclib puts that point (the pixel the pointer really is at,
+    // whole pixels being all WebDriver moves by).
+    let (sx, sy) = screen_of(&client, 30.0, 70.0).await;
+    let (sx, sy) = (sx.round(), sy.round());
+    client
+        .perform_actions(
+            MouseActions::new("mouse".into()).then(PointerAction::MoveTo {
+                duration: None,
+                x: sx,
+                y: sy,
+            }),
+        )
+        .await
+        .unwrap();
+    until(
+        &client,
+        "the pointer's position",
+        "document.getElementById('geo-readout').dataset.lat !== undefined",
+    )
+    .await;
+    let read = client
+        .execute(
+            "const r = document.getElementById('map').getBoundingClientRect();
+             const v = window.seacover.view;
+             const d = document.getElementById('geo-readout');
+             return [Number(d.dataset.lat), Number(d.dataset.lon), d.textContent,
+                     (arguments[0] - r.left - v.ox) / v.scale, (v.oy - (arguments[1] - r.top)) / v.scale];",
+            vec![json!(sx), json!(sy)],
+        )
+        .await
+        .unwrap();
+    let (lat, lon) = (read[0].as_f64().unwrap(), read[1].as_f64().unwrap());
+    let (wx, wy) = (read[3].as_f64().unwrap(), read[4].as_f64().unwrap());
+    assert!(
+        (wx - 30.0).abs() < 1.0 && (wy - 70.0).abs() < 1.0,
+        "the pointer is at ({wx}, {wy})"
+    );
+    let (want_lat, want_lon) = place(origin, wx, wy);
+    // 1e-8° is a millimetre; the plane's distortion 76 m out is 1e-12 of it.
+    assert!(
+        (lat - want_lat).abs() < 1e-8 && (lon - want_lon).abs() < 1e-8,
+        "the readout says {lat}, {lon}; geographiclib {want_lat}, {want_lon}"
+    );
+    // As people read it: degrees to 7 decimals (a centimetre) with the
+    // hemisphere, "35.3626306° S  149.1655598° E".
+    let text = read[2].as_str().unwrap();
+    let words: Vec<&str> = text.split_whitespace().collect();
+    let degrees = |w: &str| w.trim_end_matches('°').parse::<f64>().unwrap();
+    assert_eq!((words.len(), words[1], words[3]), (4, "S", "E"), "{text}");
+    assert!(
+        (degrees(words[0]) + want_lat).abs() <= 5.1e-8
+            && (degrees(words[2]) - want_lon).abs() <= 5.1e-8
+            && words[0]
+                .split_once('.')
+                .unwrap()
+                .1
+                .trim_end_matches('°')
+                .len()
+                == 7,
+        "{text}"
+    );
+    screenshot(&client, "geo").await;
+
+    // The north arrow points to true north at the centre of the map: there
+    // the meridians have turned by Δλ sin φ from the origin's (0.19° 30 km
+    // east of Canberra). geographiclib's step north, seen in the plane,
+    // gives the expected angle.
+    let g = Geodesic::wgs84();
+    let north_at = |cx: f64, cy: f64| -> f64 {
+        let (lat, lon) = place(origin, cx, cy);
+        let (nlat, nlon): (f64, f64) = g.direct(lat, lon, 0.0, 10.0);
+        let (nx, ny) = locate(origin, nlat, nlon);
+        (nx - cx).atan2(ny - cy).to_degrees()
+    };
+    for east in [0.0, 30_000.0] {
+        let centre = client
+            .execute(
+                "const v = window.seacover.view;
+                 v.pan(-arguments[0] * v.scale, 0);
+                 return v.toWorld(v.width / 2, v.height / 2);",
+                vec![json!(east)],
+            )
+            .await
+            .unwrap();
+        let (cx, cy) = (centre[0].as_f64().unwrap(), centre[1].as_f64().unwrap());
+        let want = north_at(cx, cy);
+        until(
+            &client,
+            "the arrow turned",
+            &format!(
+                "Math.abs(Number(document.getElementById('north-arrow').dataset.rotation) - ({want})) < 1e-4"
+            ),
+        )
+        .await;
+        if east > 0.0 {
+            // In the southern hemisphere the meridians meet below, at the
+            // south pole: east of the origin, north leans east (clockwise)
+            // by Δλ |sin φ| = 30 km / (N cos φ) × sin 35.36° = 0.19°.
+            assert!((0.18..0.2).contains(&want), "north at {cx} m east: {want}°");
+        }
+    }
+    screenshot(&client, "geo-30-km-east").await;
+
+    let errors = client
+        .execute("return window.__errors;", vec![])
+        .await
+        .unwrap();
+    assert_eq!(errors, json!([]), "the page reported errors");
+    client.close().await.unwrap();
+    stop.cancel();
     server.await.unwrap().unwrap();
 }

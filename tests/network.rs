@@ -2,8 +2,11 @@
 //! on port 0, real WebSocket and HTTP clients, time warp so that minutes of
 //! mission run in seconds.
 
+mod common;
+
 use std::time::{Duration, Instant};
 
+use common::link::{hello, next_json};
 use futures_util::{SinkExt, StreamExt};
 use seacover::agent::{AgentConfig, paper_vessels, run_fleet};
 use seacover::control::model::VesselParams;
@@ -117,45 +120,6 @@ async fn the_paper_fleet_converges_through_the_network() {
     agents.cancel();
     fleet.await.unwrap();
     server.stop().await;
-}
-
-async fn hello(
-    url: String,
-    id: &'static str,
-) -> (
-    impl SinkExt<Message> + Unpin,
-    impl StreamExt<Item = Result<Message, tokio_tungstenite::tungstenite::Error>> + Unpin,
-) {
-    let (socket, _) = tokio_tungstenite::connect_async(url.as_str())
-        .await
-        .unwrap();
-    let (mut sink, mut stream) = socket.split();
-    let _ = sink
-        .send(Message::text(
-            json!({"type": "hello", "vessel": id, "protocol": 1}).to_string(),
-        ))
-        .await;
-    let welcome = next_json(&mut stream).await;
-    assert_eq!(welcome["type"], "welcome", "{welcome}");
-    assert_eq!(welcome["vessel"], id);
-    (sink, stream)
-}
-
-async fn next_json(
-    stream: &mut (impl StreamExt<Item = Result<Message, tokio_tungstenite::tungstenite::Error>> + Unpin),
-) -> Value {
-    loop {
-        match tokio::time::timeout(Duration::from_secs(5), stream.next())
-            .await
-            .expect("a frame in time")
-        {
-            Some(Ok(Message::Text(t))) => return serde_json::from_str(&t).unwrap(),
-            Some(Ok(Message::Close(_))) | None => return Value::Null,
-            Some(Ok(_)) => continue,
-            // The peer went away: as good as a close for these tests.
-            Some(Err(_)) => return Value::Null,
-        }
-    }
 }
 
 fn pose(x: f64, y: f64) -> Message {

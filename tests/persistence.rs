@@ -7,12 +7,14 @@
 //! write. The one write in flight at the kill may or may not have landed;
 //! nothing else may differ.
 
+mod common;
+
 use std::collections::BTreeMap;
-use std::io::{BufRead, BufReader};
 use std::path::Path;
-use std::process::{Child, Command, Stdio};
+use std::process::{Command, Stdio};
 use std::time::Duration;
 
+use common::server::{eventually, mission, serve_command, spawn_server, start};
 use rand::{RngExt, SeedableRng};
 use seacover::agent::{AgentConfig, paper_vessels, run_fleet};
 use seacover::control::model::VesselParams;
@@ -21,37 +23,6 @@ use seacover::server::{ServeConfig, serve};
 use serde_json::json;
 use tokio::net::TcpListener;
 use tokio_util::sync::CancellationToken;
-
-/// `seacover serve` on port 0 with this data directory and configuration.
-fn serve_command(data: &Path, config: &Path) -> Command {
-    let mut command = Command::new(env!("CARGO_BIN_EXE_seacover"));
-    command
-        .args(["serve", "--bind", "127.0.0.1:0", "--data-dir"])
-        .arg(data)
-        .arg("--config")
-        .arg(config)
-        .stdout(Stdio::piped());
-    command
-}
-
-/// Starts `command` and returns it with the address it printed.
-fn start(mut command: Command) -> (Child, String) {
-    let mut child = command.spawn().unwrap();
-    let mut line = String::new();
-    BufReader::new(child.stdout.take().unwrap())
-        .read_line(&mut line)
-        .unwrap();
-    assert!(line.starts_with("seacover: serving on"), "{line:?}");
-    let addr = line.trim().rsplit("http://").next().unwrap().to_string();
-    (child, addr)
-}
-
-/// Starts the real binary on port 0 and returns it with its address.
-fn spawn_server(data: &Path, config: &Path) -> (Child, String) {
-    let mut command = serve_command(data, config);
-    command.stderr(Stdio::null());
-    start(command)
-}
 
 /// The risk part of the mission as the model sees it: base and objects by id
 /// in order.
@@ -132,16 +103,6 @@ impl Write {
         );
         Ok(status.is_success())
     }
-}
-
-async fn mission(http: &reqwest::Client, addr: &str) -> MissionDocument {
-    http.get(format!("http://{addr}/api/v1/mission"))
-        .send()
-        .await
-        .unwrap()
-        .json()
-        .await
-        .unwrap()
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -225,19 +186,6 @@ async fn sigkill_during_writes_loses_nothing_acknowledged() {
     assert!(acknowledged_total > 30, "only {acknowledged_total} writes");
     let _ = child.kill();
     let _ = child.wait();
-}
-
-/// Polls `check` every 100 ms for up to `secs`.
-async fn eventually<F, Fut>(secs: u64, what: &str, mut check: F)
-where
-    F: FnMut() -> Fut,
-    Fut: std::future::Future<Output = bool>,
-{
-    let deadline = tokio::time::Instant::now() + Duration::from_secs(secs);
-    while !check().await {
-        assert!(tokio::time::Instant::now() < deadline, "timed out: {what}");
-        tokio::time::sleep(Duration::from_millis(100)).await;
-    }
 }
 
 async fn start_in_process(

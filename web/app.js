@@ -5,10 +5,13 @@
 import { write, askToken, token, showError } from "./api.js";
 import { MapView, ramp } from "./map.js";
 import { Series, drawChart } from "./charts.js";
+import { GeoOverlay } from "./geo-overlay.js";
 
 const $ = (id) => document.getElementById(id);
 const canvas = $("map");
 const view = new MapView(canvas);
+const geo = new GeoOverlay(canvas, view);
+view.onDraw = () => geo.update();
 const state = {
   snapshot: null,
   selectedObject: null,
@@ -19,7 +22,7 @@ const state = {
   snapshots: 0,
 };
 // For people poking from the console, and for the browser tests.
-window.seacover = { view, state };
+window.seacover = { view, state, geo };
 
 // ---- stream -----------------------------------------------------------------
 
@@ -108,8 +111,13 @@ function drawTable(snap) {
     const row = body.rows[i];
     const cells = row.cells;
     const link = v.connected ? (v.live ? "live" : "silent") : "off";
-    cells[1].textContent = link;
-    cells[1].className = v.connected ? "" : "off";
+    // A vessel an operator has taken over (an autopilot out of GUIDED)
+    // keeps its cell but follows no command.
+    const mode = v.pose && v.pose.telemetry && v.pose.telemetry.mode;
+    const operator = v.controlled === false;
+    cells[1].textContent = operator ? `${link} · operator${mode ? ` (${mode})` : ""}` : link;
+    cells[1].title = operator ? "not under control: the coordinator's commands are not followed" : "";
+    cells[1].className = !v.connected ? "off" : operator ? "operator" : "";
     cells[2].textContent = v.last_command ? v.last_command.E.toFixed(2) : "–";
     cells[3].textContent = v.pose ? Math.hypot(v.pose.u, v.pose.v).toFixed(2) : "–";
     cells[4].textContent = v.last_seen == null ? "never" : `${Math.max(0, snap.time - v.last_seen).toFixed(1)} s ago`;

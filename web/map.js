@@ -80,6 +80,7 @@ export class MapView {
         this.dirty = false;
         const started = performance.now();
         this.draw();
+        this.onDraw?.();
         // Cost of the last draws (ms, moving average), for the console and
         // the smoothness measurement in the README.
         const ms = performance.now() - started;

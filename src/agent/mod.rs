@@ -5,23 +5,30 @@
 //! simulated time locked to the (warped) wall clock, reports its pose at
 //! 20 Hz, and tracks the newest command, extrapolated with its rates; when
 //! that command is more than 1 s old it holds station (u_d = r_d = 0).
-//! A lost link is retried with exponential backoff and jitter; the vessel
-//! keeps moving meanwhile, as a real one would.
+//! A lost link is retried with exponential backoff and jitter ([`link`]);
+//! the vessel keeps moving meanwhile, as a real one would.
+//!
+//! [`mavlink`] is the other kind of agent: a bridge that puts real
+//! autopilots (ArduPilot boats) on the same links.
+
+pub mod link;
+pub mod mavlink;
 
 use std::time::Duration;
 
-use futures_util::{SinkExt, StreamExt};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use tokio_tungstenite::tungstenite::Message;
+use tokio::sync::{mpsc, watch};
 use tokio_util::sync::CancellationToken;
+
+use link::LinkConfig;
 
 use crate::control::Vec3;
 use crate::control::controller::{ControllerGains, Reference, control};
 use crate::control::disturbance::Disturbance;
 use crate::control::model::{State, VesselParams, step};
 use crate::control::observer::{Observer, ObserverGains};
-use crate::protocol::{CommandDocument, CoordinatorMessage, PoseDocument, VesselMessage};
+use crate::protocol::{CommandDocument, PoseDocument};
 
 /// One simulated vessel's settings.
 #[derive(Debug, Clone)]
@@ -163,28 +170,13 @@ impl Onboard {
             u: self.state.vel.x,
             v: self.state.vel.y,
             r: self.state.vel.z,
+            controlled: None,
             telemetry: Some(serde_json::json!({
                 "tau_d": [tau.x, tau.y, tau.z],
                 "tau_d_hat": [est.x, est.y, est.z],
             })),
         }
     }
-}
-
-fn link_request(
-    config: &AgentConfig,
-) -> Result<
-    tokio_tungstenite::tungstenite::handshake::client::Request,
-    tokio_tungstenite::tungstenite::Error,
-> {
-    use tokio_tungstenite::tungstenite::client::IntoClientRequest;
-    let mut request = config.url.as_str().into_client_request()?;
-    if let Some(token) = &config.token
-        && let Ok(value) = format!("Bearer {token}").parse()
-    {
-        request.headers_mut().insert("authorization", value);
-    }
-    Ok(request)
 }
 
 /// Runs every vessel until `shutdown`.
@@ -217,81 +209,33 @@ async fn run_vessel(
     shutdown: CancellationToken,
 ) {
     let mut onboard = Onboard::new(&vessel);
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let period = 1.0 / config.pose_hz;
-    let real_period = Duration::from_secs_f64(period / config.time_warp);
-    let mut backoff = Duration::from_millis(100);
-    while !shutdown.is_cancelled() {
-        let request = match link_request(&config) {
-            Ok(r) => r,
-            Err(e) => {
-                tracing::error!(url = %config.url, error = %e, "bad coordinator URL");
-                return;
-            }
-        };
-        let connected = tokio::select! {
-            _ = shutdown.cancelled() => return,
-            c = tokio_tungstenite::connect_async(request) => c,
-        };
-        let Ok((socket, _)) = connected else {
-            // Keep sailing while disconnected.
-            let jitter = rng.random_range(0.5..1.5);
-            let wait = backoff.mul_f64(jitter);
-            onboard.advance(wait.as_secs_f64() * config.time_warp);
-            tokio::select! {
-                _ = shutdown.cancelled() => return,
-                _ = tokio::time::sleep(wait) => {}
-            }
-            backoff = (backoff * 2).min(Duration::from_secs(5));
-            continue;
-        };
-        backoff = Duration::from_millis(100);
-        let (mut sink, mut stream) = socket.split();
-        let hello = VesselMessage::Hello {
+    let (poses, pose_slot) = watch::channel(None);
+    let (commands, mut incoming) = mpsc::channel(4);
+    let link = tokio::spawn(link::run(
+        LinkConfig {
+            url: config.url.clone(),
+            token: config.token.clone(),
             vessel: vessel.id.clone(),
-            protocol: 1,
-            actuator: None,
-        };
-        if sink
-            .send(Message::text(
-                serde_json::to_string(&hello).expect("serializes"),
-            ))
-            .await
-            .is_err()
-        {
-            continue;
-        }
-        let mut ticker = tokio::time::interval(real_period);
-        ticker.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
-        loop {
-            tokio::select! {
-                _ = shutdown.cancelled() => {
-                    let _ = sink.send(Message::Close(None)).await;
-                    return;
-                }
-                _ = ticker.tick() => {
-                    onboard.advance(period);
-                    let pose = VesselMessage::Pose(onboard.pose());
-                    if sink.send(Message::text(serde_json::to_string(&pose).expect("serializes"))).await.is_err() {
-                        break;
-                    }
-                }
-                frame = stream.next() => match frame {
-                    Some(Ok(Message::Text(t))) => match serde_json::from_str::<CoordinatorMessage>(&t) {
-                        Ok(CoordinatorMessage::Command(c)) => onboard.command = Some((c, onboard.t)),
-                        Ok(CoordinatorMessage::Welcome { .. }) => {}
-                        Ok(CoordinatorMessage::Error { code, message }) if code == "shutting_down" => {
-                            tracing::info!(vessel = %vessel.id, %message, "coordinator stopping");
-                        }
-                        Ok(CoordinatorMessage::Error { code, message }) => {
-                            tracing::warn!(vessel = %vessel.id, %code, %message, "coordinator error");
-                        }
-                        Err(e) => tracing::warn!(vessel = %vessel.id, error = %e, "unreadable frame"),
-                    },
-                    Some(Ok(Message::Close(_))) | None | Some(Err(_)) => break,
-                    Some(Ok(_)) => {}
-                },
+            seed,
+            astern: None,
+        },
+        pose_slot,
+        commands,
+        shutdown.clone(),
+    ));
+    let period = 1.0 / config.pose_hz;
+    let mut ticker = tokio::time::interval(Duration::from_secs_f64(period / config.time_warp));
+    ticker.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+    // The vessel sails on whether or not its link is up, as a real one would.
+    loop {
+        tokio::select! {
+            _ = shutdown.cancelled() => break,
+            _ = ticker.tick() => {
+                onboard.advance(period);
+                poses.send_replace(Some(onboard.pose()));
             }
+            Some(c) = incoming.recv() => onboard.command = Some((c, onboard.t)),
         }
     }
+    let _ = link.await;
 }

@@ -141,6 +141,10 @@ pub struct Guidance {
     r_d_dot: f64,
     /// Whether the `course` mode is thrusting astern.
     astern: bool,
+    /// The vessel cannot thrust astern: the `course` mode turns it round
+    /// instead and never asks for a negative surge (the `paper` law never
+    /// does).
+    pub ahead_only: bool,
 }
 
 /// The `course` mode switches between ahead and astern when the heading
@@ -157,6 +161,7 @@ impl Guidance {
             u_d_dot: 0.0,
             r_d_dot: 0.0,
             astern: false,
+            ahead_only: false,
         }
     }
 
@@ -274,7 +279,7 @@ impl Guidance {
                     // with hysteresis so the choice does not flicker.
                     let flip = |a: f64| wrap(a + std::f64::consts::PI);
                     let current = if self.astern { flip(ahead) } else { ahead };
-                    if current.abs() > ASTERN_SWITCH {
+                    if current.abs() > ASTERN_SWITCH && !self.ahead_only {
                         self.astern = !self.astern;
                     }
                     let psi_e = if self.astern { flip(ahead) } else { ahead };
@@ -288,8 +293,9 @@ impl Guidance {
                     // turns the velocity along with the hull.
                     let alpha = psi_e.cos().max(0.0).powi(2);
                     let (u, v) = (state.vel.x, state.vel.y);
+                    let u_d = alpha * u_d + (1.0 - alpha) * u;
                     (
-                        alpha * u_d + (1.0 - alpha) * u,
+                        if self.ahead_only { u_d.max(0.0) } else { u_d },
                         r_d,
                         psi_e,
                         Some(alpha * r_d * beam + (1.0 - alpha) * v * r_d),
@@ -380,5 +386,31 @@ mod tests {
         );
         assert!(back.u_d < 0.0);
         assert!(back.psi_e.abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_vessel_that_cannot_go_astern_turns_round_instead() {
+        let mut g = Guidance::new(GuidanceGains::default());
+        g.ahead_only = true;
+        // At rest, bow east, goal due west and a little north: it must turn
+        // to port (the shorter way round) and not ask for a negative surge.
+        let s = State {
+            x: 0.0,
+            y: 0.0,
+            psi: 0.0,
+            vel: Vec3::zeros(),
+        };
+        for k in 0..20 {
+            let c = g.update(0.1 * k as f64, &s, (-10.0, 1.0));
+            assert!(c.u_d >= 0.0, "{c:?}");
+            assert!(c.r_d > 0.0 && c.psi_e > 1.9, "{c:?}");
+        }
+        // Moving ahead at 1 m/s, goal behind: no astern thrust to brake.
+        let moving = State {
+            vel: Vec3::new(1.0, 0.0, 0.0),
+            ..s
+        };
+        let c = g.update(3.0, &moving, (-10.0, 1.0));
+        assert!(c.u_d >= 0.0 && c.r_d > 0.0, "{c:?}");
     }
 }

@@ -20,6 +20,7 @@ pub mod guidance;
 pub mod halfplanes;
 pub mod lloyd;
 pub mod model;
+pub mod ned;
 pub mod observer;
 pub mod safety;
 

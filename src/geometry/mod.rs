@@ -14,6 +14,7 @@
 //! (boolean operations, triangulation) without conversion.
 
 pub mod convex;
+pub mod geodesy;
 pub mod grid;
 pub mod quadrature;
 pub mod region;

@@ -14,10 +14,10 @@ use super::error::ApiError;
 use super::state::{ChangeResult, MissionChange, Request};
 use crate::coverage::Options;
 use crate::protocol::{
-    CoverageDocument, EvaluationDocument, MissionDocument, RegionDocument, RiskObjectDocument,
-    VesselStatusDocument,
+    CoverageDocument, EvaluationDocument, MissionDocument, OriginDocument, RegionInput,
+    RiskObjectDocument, RiskObjectInput, VesselStatusDocument,
 };
-use crate::scenario::{Scenario, evaluation_document, parse_document};
+use crate::scenario::{Scenario, evaluation_document, localize, parse_input};
 
 /// Liveness: `ok` while the server answers.
 #[utoipa::path(
@@ -128,9 +128,51 @@ pub async fn coverage(State(app): State<AppState>) -> Json<CoverageDocument> {
     Json(app.snapshot.borrow().coverage.clone())
 }
 
+/// The partition of the newest tick as GeoJSON (RFC 7946), for GIS tools.
+///
+/// Every cell (a `Polygon`, or a `MultiPolygon` of its pieces;
+/// properties `kind` = `cell`, `id`, `mass`, `area`, `centroid` as
+/// `[lon, lat]`, `E` the vessel's distance to it in metres) and every
+/// vessel (a `Point`; `kind` = `vessel`, `id`, `heading_deg` clockwise from
+/// north, `connected`, `live`, `controlled`). Needs the mission's origin.
+#[utoipa::path(
+    get,
+    path = "/api/v1/coverage.geojson",
+    tag = "coverage",
+    responses(
+        (status = 200, description = "A GeoJSON FeatureCollection: [lon, lat] positions, closed rings, exteriors counter-clockwise and holes clockwise, no `crs`.", body = Object, content_type = "application/geo+json"),
+        (status = 404, description = "`not_found`: the mission has no origin to place the partition on the globe.", body = crate::protocol::ErrorDocument),
+    ),
+)]
+pub async fn coverage_geojson(State(app): State<AppState>) -> Result<Response, ApiError> {
+    let snap = app.snapshot.borrow().clone();
+    let frame = match snap.document.mission.origin {
+        Some(origin) => super::state::origin_frame(origin)?,
+        None => {
+            return Err(ApiError::NotFound(
+                "the mission has no origin, so its partition has no place on the globe: \
+                 set one with PUT /api/v1/mission/origin"
+                    .into(),
+            ));
+        }
+    };
+    let collection =
+        crate::georef::output::coverage(&frame, &snap.coverage.cells, &snap.document.vessels);
+    let body = serde_json::to_string(&collection).expect("GeoJSON serializes");
+    Ok((
+        [(axum::http::header::CONTENT_TYPE, "application/geo+json")],
+        body,
+    )
+        .into_response())
+}
+
 /// A stateless what-if: evaluates a scenario document, taking the region
 /// and the risk it omits from the current mission. Validated exactly as
 /// `seacover evaluate` validates; changes nothing.
+///
+/// Geographic parts are placed with the document's `origin`, or else the
+/// mission's; a document with an origin other than the mission's must give
+/// its own region and risk, since the mission's are in the mission's plane.
 #[utoipa::path(
     post,
     path = "/api/v1/coverage/evaluate",
@@ -150,13 +192,19 @@ pub async fn evaluate(
 ) -> Result<Json<EvaluationDocument>, ApiError> {
     let text = std::str::from_utf8(&body)
         .map_err(|e| ApiError::Malformed(format!("body is not UTF-8: {e}")))?;
-    let mut doc = parse_document(text)?;
-    {
-        let snap = app.snapshot.borrow();
-        let mission = &snap.document.mission;
-        doc.region.get_or_insert_with(|| mission.region.clone());
-        doc.risk.get_or_insert_with(|| mission.risk.clone());
+    let input = parse_input(text)?;
+    let mission = app.snapshot.borrow().document.mission.clone();
+    let elsewhere = input.origin.is_some() && input.origin != mission.origin;
+    if elsewhere && (input.region.is_none() || input.risk.is_none()) {
+        return Err(ApiError::Invalid(
+            "origin: differs from the mission's; a document with its own origin gives its own \
+             region and risk (the mission's are in the mission's plane)"
+                .into(),
+        ));
     }
+    let mut doc = localize(&input, mission.origin).map_err(ApiError::from)?;
+    doc.region.get_or_insert(mission.region);
+    doc.risk.get_or_insert(mission.risk);
     // Up to 10 000 vessels: CPU work, off the async workers.
     let result = tokio::task::spawn_blocking(move || {
         let scenario = Scenario::from_document(&doc)?;
@@ -190,12 +238,46 @@ fn respond(status: StatusCode, result: ChangeResult) -> Response {
     }
 }
 
+/// Sets the mission's WGS84 origin.
+///
+/// The mission's plane is the East-North-Up plane tangent to the WGS84
+/// ellipsoid at the origin (x east, y north). The region and the risk
+/// objects keep their local coordinates: moving the origin moves them on
+/// the globe.
+#[utoipa::path(
+    put,
+    path = "/api/v1/mission/origin",
+    tag = "mission",
+    request_body = OriginDocument,
+    responses(
+        (status = 200, description = "The mission with the new origin, once durable.", body = MissionDocument),
+        (status = 400, response = super::openapi::Malformed),
+        (status = 401, response = super::openapi::Unauthorized),
+        (status = 413, response = super::openapi::TooLarge),
+        (status = 422, response = super::openapi::Invalid),
+        (status = 429, response = super::openapi::RateLimited),
+        (status = 500, response = super::openapi::NotStored),
+        (status = 503, response = super::openapi::ShuttingDown),
+    ),
+    security(("bearer" = [])),
+)]
+pub async fn put_origin(State(app): State<AppState>, body: Bytes) -> Result<Response, ApiError> {
+    let origin: OriginDocument = parse(&body)?;
+    Ok(respond(
+        StatusCode::OK,
+        change(&app, MissionChange::Origin(origin)).await?,
+    ))
+}
+
 /// Replaces the task region.
+///
+/// In the local plane, or as GeoJSON (a Polygon, its islands as interior
+/// rings) placed with the mission's origin.
 #[utoipa::path(
     put,
     path = "/api/v1/mission/region",
     tag = "mission",
-    request_body = RegionDocument,
+    request_body = RegionInput,
     responses(
         (status = 200, description = "The mission with the new region, once durable.", body = MissionDocument),
         (status = 400, response = super::openapi::Malformed),
@@ -209,7 +291,7 @@ fn respond(status: StatusCode, result: ChangeResult) -> Response {
     security(("bearer" = [])),
 )]
 pub async fn put_region(State(app): State<AppState>, body: Bytes) -> Result<Response, ApiError> {
-    let region: RegionDocument = parse(&body)?;
+    let region: RegionInput = parse(&body)?;
     Ok(respond(
         StatusCode::OK,
         change(&app, MissionChange::Region(region)).await?,
@@ -248,11 +330,14 @@ pub async fn put_base(State(app): State<AppState>, body: Bytes) -> Result<Respon
 }
 
 /// Adds a risk object; without an id the server assigns `object-N`.
+///
+/// It may be placed at `lat`, `lon` instead of `x`, `y` when the mission
+/// has an origin; it is stored, and answered, at `x`, `y`.
 #[utoipa::path(
     post,
     path = "/api/v1/risk-objects",
     tag = "mission",
-    request_body = RiskObjectDocument,
+    request_body = RiskObjectInput,
     responses(
         (status = 201, description = "The stored object with its id, once durable.", body = RiskObjectDocument),
         (status = 400, response = super::openapi::Malformed),
@@ -267,7 +352,7 @@ pub async fn put_base(State(app): State<AppState>, body: Bytes) -> Result<Respon
     security(("bearer" = [])),
 )]
 pub async fn post_object(State(app): State<AppState>, body: Bytes) -> Result<Response, ApiError> {
-    let object: RiskObjectDocument = parse(&body)?;
+    let object: RiskObjectInput = parse(&body)?;
     Ok(respond(
         StatusCode::CREATED,
         change(&app, MissionChange::AddObject(object)).await?,
@@ -302,12 +387,14 @@ pub async fn get_object(
 }
 
 /// Replaces a risk object; the path's id wins over one in the body.
+///
+/// Like a new one, it may be placed at `lat`, `lon`.
 #[utoipa::path(
     put,
     path = "/api/v1/risk-objects/{id}",
     tag = "mission",
     params(("id" = String, Path, description = "The risk object's id.")),
-    request_body = RiskObjectDocument,
+    request_body = RiskObjectInput,
     responses(
         (status = 200, description = "The stored object, once durable.", body = RiskObjectDocument),
         (status = 400, response = super::openapi::Malformed),
@@ -326,7 +413,7 @@ pub async fn put_object(
     Path(id): Path<String>,
     body: Bytes,
 ) -> Result<Response, ApiError> {
-    let object: RiskObjectDocument = parse(&body)?;
+    let object: RiskObjectInput = parse(&body)?;
     Ok(respond(
         StatusCode::OK,
         change(&app, MissionChange::PutObject(id, object)).await?,

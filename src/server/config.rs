@@ -12,6 +12,7 @@
 //!
 //! ```toml
 //! tick_hz = 10.0
+//! origin = { lat = -35.363261, lon = 149.16523 }   # WGS84, for GeoJSON and lat/lon
 //!
 //! [server]
 //! liveness = 3.0       # mission seconds of silence before a vessel leaves
@@ -41,7 +42,7 @@ use serde::Deserialize;
 
 use super::error::ApiError;
 use super::state::Mission;
-use crate::protocol::{ActuatorDocument, RegionDocument, RiskDocument};
+use crate::protocol::{ActuatorDocument, OriginDocument, RegionDocument, RiskDocument};
 
 /// The file as written: everything optional.
 #[derive(Debug, Default, Deserialize)]
@@ -50,6 +51,8 @@ pub struct ConfigFile {
     pub tick_hz: Option<f64>,
     #[serde(default)]
     pub server: ServerSection,
+    /// `{ lat, lon }`: the mission's geographic origin.
+    pub origin: Option<OriginDocument>,
     pub region: Option<RegionDocument>,
     pub risk: Option<RiskDocument>,
     pub actuator: Option<ActuatorDocument>,
@@ -158,6 +161,9 @@ impl Settings {
     fn from_file(file: ConfigFile) -> Result<Settings, ApiError> {
         let defaults = Settings::default();
         let mut doc = defaults.mission.document();
+        if file.origin.is_some() {
+            doc.origin = file.origin;
+        }
         if let Some(region) = file.region {
             doc.region = region;
         }
@@ -264,8 +270,9 @@ mod tests {
     fn the_load_benchmark_mission_is_the_fleet_1000_scenario() {
         let s = Settings::parse(include_str!("../../examples/fleet-1000.toml")).unwrap();
         let doc = s.mission.document();
-        let scenario: crate::protocol::ScenarioDocument =
-            serde_json::from_str(include_str!("../../examples/fleet-1000.json")).unwrap();
+        let scenario =
+            crate::scenario::parse_document(include_str!("../../examples/fleet-1000.json"))
+                .unwrap();
         assert_eq!(Some(doc.region), scenario.region);
         // The mission names its objects; the scenario leaves them unnamed.
         let mut risk = doc.risk;
@@ -273,6 +280,14 @@ mod tests {
             o.id = None;
         }
         assert_eq!(Some(risk), scenario.risk);
+    }
+
+    #[test]
+    fn an_origin_seeds_the_mission() {
+        let s = Settings::parse("origin = { lat = -35.363261, lon = 149.16523 }").unwrap();
+        let origin = s.mission.document().origin.unwrap();
+        assert_eq!((origin.lat, origin.lon), (-35.363261, 149.16523));
+        assert_eq!(Settings::parse("").unwrap().mission.origin, None);
     }
 
     #[test]
@@ -293,6 +308,8 @@ mod tests {
             ("[safety]\nsafety_distance = -1", "safety.safety_distance"),
             ("[safety]\nbraking = 1", "braking"),
             ("[server]\nwrite_rate = 0", "write_rate"),
+            ("origin = { lat = 95, lon = 0 }", "origin.lat"),
+            ("origin = { lat = 45 }", "origin"),
             ("speed = 3", "speed"),
         ] {
             let err = Settings::parse(text).unwrap_err().to_string();

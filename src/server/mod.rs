@@ -106,6 +106,7 @@ pub const MAX_BODY: usize = 1024 * 1024;
 /// Every route of SPEC §3.
 pub fn router(app: AppState) -> Router {
     let writes = Router::new()
+        .route("/api/v1/mission/origin", put(api::put_origin))
         .route("/api/v1/mission/region", put(api::put_region))
         .route("/api/v1/mission/risk/base", put(api::put_base))
         .route("/api/v1/risk-objects", post(api::post_object))
@@ -137,6 +138,7 @@ pub fn router(app: AppState) -> Router {
         .route("/api/v1/vessels", get(api::vessels))
         .route("/api/v1/vessels/{id}", get(api::vessel))
         .route("/api/v1/coverage", get(api::coverage))
+        .route("/api/v1/coverage.geojson", get(api::coverage_geojson))
         .route("/api/v1/coverage/evaluate", post(api::evaluate))
         .route("/api/v1/stream", get(ws::stream))
         .layer(axum::middleware::map_response(error::json_too_large))

@@ -38,17 +38,21 @@ use crate::control::safety::{SafetyLayer, SafetyParams};
 use crate::coverage::evaluate::cell_figures;
 use crate::coverage::partition::power_cells_with;
 use crate::coverage::{CellResult, Evaluation, Fleet, Options, RiskField, Vessel, evaluate};
+use crate::geometry::geodesy::LocalFrame;
 use crate::geometry::{Point, Region};
 use crate::protocol::{
     ActuatorDocument, CommandDocument, CoordinatorMessage, CoverageDocument, GuidanceDocument,
-    MissionDocument, PoseDocument, RegionDocument, RiskDocument, RiskObjectDocument,
-    SafetyDocument, SnapshotDocument, VesselStatusDocument,
+    MissionDocument, OriginDocument, PoseDocument, RegionDocument, RegionInput, RiskDocument,
+    RiskObjectDocument, RiskObjectInput, SafetyDocument, SnapshotDocument, VesselStatusDocument,
 };
-use crate::scenario::{Scenario, evaluation_document};
+use crate::scenario::{Scenario, ScenarioError, evaluation_document};
 
 /// The mission: what to cover and how.
 #[derive(Debug, Clone)]
 pub struct Mission {
+    /// The WGS84 origin of the local plane, when geo-referenced; validated
+    /// ([`crate::geometry::geodesy::LocalFrame::new`]).
+    pub origin: Option<OriginDocument>,
     pub region_doc: RegionDocument,
     pub risk_doc: RiskDocument,
     pub region: Region,
@@ -78,6 +82,7 @@ impl Mission {
                 .expect("default safety parameters are valid"),
         );
         Mission {
+            origin: None,
             region_doc: doc.region.clone().expect("paper has a region"),
             risk_doc,
             region: scenario.region,
@@ -130,7 +135,11 @@ impl Mission {
             SafetyLayer::new(&region, safety)
                 .map_err(|e| ApiError::from(crate::scenario::ScenarioError::from(e)))?,
         );
+        if let Some(o) = doc.origin {
+            origin_frame(o)?;
+        }
         Ok(Mission {
+            origin: doc.origin,
             region_doc: doc.region.clone(),
             risk_doc,
             region,
@@ -146,6 +155,7 @@ impl Mission {
     pub fn document(&self) -> MissionDocument {
         let g = &self.guidance;
         MissionDocument {
+            origin: self.origin,
             region: self.region_doc.clone(),
             risk: self.risk_doc.clone(),
             actuator: self.actuator,
@@ -179,6 +189,12 @@ impl Mission {
     pub fn mode(&self) -> GuidanceMode {
         self.guidance.mode
     }
+
+    /// The local plane of the mission's origin, when it has one.
+    pub fn frame(&self) -> Option<LocalFrame> {
+        // Validated when it was set (`from_document`, `changed`).
+        self.origin.and_then(|o| origin_frame(o).ok())
+    }
 }
 
 /// What links and handlers ask of the tick task.
@@ -189,6 +205,9 @@ pub enum Request {
         id: String,
         link: u64,
         actuator: Option<ActuatorDocument>,
+        /// The vessel can thrust astern (its hello's `astern`, default
+        /// true); without, its guidance is ahead only.
+        astern: bool,
         tx: mpsc::Sender<Outgoing>,
         /// The link's newest pose. A slot rather than a request per pose:
         /// the tick only ever wants the newest, and 1000 vessels at 20 Hz
@@ -212,13 +231,17 @@ pub enum Request {
     },
 }
 
-/// One write of the REST API.
+/// One write of the REST API. Geographic inputs are placed in the plane by
+/// [`Mission::changed`], with the origin of the mission they change: the
+/// tick task applies changes in order, so a region written just after an
+/// origin is placed with that origin.
 #[derive(Debug, Clone)]
 pub enum MissionChange {
-    Region(RegionDocument),
+    Origin(OriginDocument),
+    Region(RegionInput),
     Base(f64),
-    AddObject(RiskObjectDocument),
-    PutObject(String, RiskObjectDocument),
+    AddObject(RiskObjectInput),
+    PutObject(String, RiskObjectInput),
     DeleteObject(String),
 }
 
@@ -235,10 +258,20 @@ impl Mission {
     /// `self` is left untouched when it is rejected.
     pub fn changed(&self, change: &MissionChange) -> Result<(Mission, ChangeResult), ApiError> {
         let mut next = self.clone();
+        let frame = self.frame();
+        let placed = |e: crate::coverage::InputError| ApiError::from(ScenarioError::from(e));
         let result = match change {
-            MissionChange::Region(doc) => {
-                next.region = crate::scenario::region_from_document(doc)?;
-                next.region_doc = doc.clone();
+            MissionChange::Origin(origin) => {
+                // The region and the objects keep their local coordinates:
+                // moving the origin moves the mission on the globe.
+                origin_frame(*origin)?;
+                next.origin = Some(*origin);
+                None
+            }
+            MissionChange::Region(input) => {
+                let doc = crate::georef::input::region(input, frame.as_ref()).map_err(placed)?;
+                next.region = crate::scenario::region_from_document(&doc)?;
+                next.region_doc = doc;
                 next.layer = Arc::new(
                     SafetyLayer::new(&next.region, next.safety)
                         .map_err(|e| ApiError::from(crate::scenario::ScenarioError::from(e)))?,
@@ -250,7 +283,8 @@ impl Mission {
                 None
             }
             MissionChange::AddObject(object) => {
-                let mut object = object.clone();
+                let mut object = crate::georef::input::risk_object(object, frame.as_ref(), "")
+                    .map_err(placed)?;
                 let id = match &object.id {
                     Some(id) => {
                         if !crate::scenario::valid_id(id) {
@@ -286,6 +320,8 @@ impl Mission {
                 Some(object)
             }
             MissionChange::PutObject(id, object) => {
+                let object = crate::georef::input::risk_object(object, frame.as_ref(), "")
+                    .map_err(placed)?;
                 let slot = next
                     .risk_doc
                     .objects
@@ -294,7 +330,7 @@ impl Mission {
                     .ok_or_else(|| ApiError::NotFound(format!("no risk object {id:?}")))?;
                 *slot = RiskObjectDocument {
                     id: Some(id.clone()),
-                    ..object.clone()
+                    ..object
                 };
                 Some(slot.clone())
             }
@@ -317,6 +353,19 @@ impl Mission {
         };
         Ok((next, answer))
     }
+}
+
+/// The local plane of an origin, or `invalid` naming `origin.lat` or
+/// `origin.lon`.
+pub fn origin_frame(
+    origin: OriginDocument,
+) -> Result<crate::geometry::geodesy::LocalFrame, ApiError> {
+    use crate::geometry::geodesy::{LatLon, LocalFrame};
+    LocalFrame::new(LatLon {
+        lat: origin.lat,
+        lon: origin.lon,
+    })
+    .map_err(|e| ApiError::Invalid(format!("origin.{e}")))
 }
 
 fn risk_field(doc: &RiskDocument) -> Result<RiskField, ApiError> {
@@ -612,6 +661,7 @@ impl Coordinator {
                 id,
                 link,
                 actuator,
+                astern,
                 tx,
                 poses,
                 reply,
@@ -658,6 +708,7 @@ impl Coordinator {
                     );
                 }
                 entry.actuator = actuator;
+                entry.guidance.ahead_only = !astern;
                 entry.link = Some(Link {
                     id: link,
                     tx,
@@ -968,6 +1019,7 @@ impl Coordinator {
                     id: id.clone(),
                     connected: e.link.is_some(),
                     live: cell.is_some(),
+                    controlled: e.pose.as_ref().and_then(|p| p.controlled).unwrap_or(true),
                     pose: e.pose.clone(),
                     actuator: e.actuator,
                     polygon: cell.and_then(|c| c.polygon.clone()),
@@ -1024,6 +1076,7 @@ mod tests {
             id: id.into(),
             link,
             actuator: None,
+            astern: true,
             tx,
             poses,
             reply,

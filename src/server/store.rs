@@ -28,8 +28,8 @@ use crate::protocol::{
     RiskObjectDocument,
 };
 
-/// Mission-wide values by name: `region`, `base`, `actuator`, `guidance`,
-/// `tick_hz`, `next_seq`.
+/// Mission-wide values by name: `origin`, `region`, `base`, `actuator`,
+/// `guidance`, `tick_hz`, `safety`, `next_seq`.
 const META: TableDefinition<&str, &str> = TableDefinition::new("meta");
 /// Risk objects by id: (insertion sequence, object JSON).
 const OBJECTS: TableDefinition<&str, (u64, &str)> = TableDefinition::new("objects");
@@ -139,6 +139,11 @@ impl Store {
         }
         objects.sort_by_key(|(seq, _)| *seq);
         Ok(Some(MissionDocument {
+            // Stores written before geo-referencing have no origin.
+            origin: match get("origin")? {
+                Some(text) => parse("origin", &text)?,
+                None => None,
+            },
             region: parse::<RegionDocument>("region", &region)?,
             risk: RiskDocument {
                 base: parse("base", &base)?,
@@ -158,6 +163,7 @@ impl Store {
     /// Replaces whatever is stored with `mission`, in one transaction.
     pub fn save(&self, mission: &MissionDocument) -> Result<(), StoreError> {
         self.write(|meta, objects| {
+            meta.insert("origin", json(&mission.origin).as_str())?;
             meta.insert("region", json(&mission.region).as_str())?;
             meta.insert("base", json(&mission.risk.base).as_str())?;
             meta.insert("actuator", json(&mission.actuator).as_str())?;
@@ -182,8 +188,12 @@ impl Store {
     pub fn apply(&self, change: &MissionChange, result: &ChangeResult) -> Result<(), StoreError> {
         self.write(|meta, objects| {
             match (change, result) {
-                (MissionChange::Region(region), _) => {
-                    meta.insert("region", json(region).as_str())?;
+                (MissionChange::Origin(origin), _) => {
+                    meta.insert("origin", json(&Some(origin)).as_str())?;
+                }
+                // The region as placed in the plane, not as given.
+                (MissionChange::Region(_), ChangeResult::Mission(mission)) => {
+                    meta.insert("region", json(&mission.region).as_str())?;
                 }
                 (MissionChange::Base(base), _) => {
                     meta.insert("base", json(base).as_str())?;
@@ -261,20 +271,26 @@ mod tests {
 
         let mut current = mission;
         let changes = [
-            MissionChange::AddObject(RiskObjectDocument {
-                id: Some("zeta".into()),
-                x: 10.0,
-                y: 20.0,
-                alpha: 3.0,
-                sigma: 4.0,
-            }),
-            MissionChange::AddObject(RiskObjectDocument {
-                id: None,
-                x: 11.0,
-                y: 21.0,
-                alpha: 1.0,
-                sigma: 2.0,
-            }),
+            MissionChange::AddObject(
+                RiskObjectDocument {
+                    id: Some("zeta".into()),
+                    x: 10.0,
+                    y: 20.0,
+                    alpha: 3.0,
+                    sigma: 4.0,
+                }
+                .into(),
+            ),
+            MissionChange::AddObject(
+                RiskObjectDocument {
+                    id: None,
+                    x: 11.0,
+                    y: 21.0,
+                    alpha: 1.0,
+                    sigma: 2.0,
+                }
+                .into(),
+            ),
             MissionChange::PutObject(
                 "object-1".into(),
                 RiskObjectDocument {
@@ -283,10 +299,22 @@ mod tests {
                     y: 50.0,
                     alpha: 9.0,
                     sigma: 9.0,
-                },
+                }
+                .into(),
             ),
             MissionChange::DeleteObject("object-2".into()),
             MissionChange::Base(0.25),
+            MissionChange::Origin(crate::protocol::OriginDocument {
+                lat: 60.39,
+                lon: 5.32,
+            }),
+            // Stored as placed in the plane, not as given.
+            MissionChange::Region(
+                serde_json::from_value(serde_json::json!({"type": "Polygon", "coordinates": [[
+                    [5.32, 60.39], [5.322, 60.39], [5.322, 60.391], [5.32, 60.391], [5.32, 60.39]
+                ]]}))
+                .unwrap(),
+            ),
         ];
         for change in &changes {
             let (next, result) = current.changed(change).unwrap();
@@ -296,5 +324,7 @@ mod tests {
         drop(store);
         let loaded = Store::open(dir.path()).unwrap().load().unwrap().unwrap();
         assert_eq!(loaded, current.document());
+        assert_eq!(loaded.region.polygon[0], [0.0, 0.0]);
+        assert!(loaded.origin.is_some());
     }
 }

@@ -38,6 +38,16 @@ const FILES: &[(&str, &str, &str)] = &[
         "text/javascript; charset=utf-8",
         include_str!("../../web/charts.js"),
     ),
+    (
+        "wgs84.js",
+        "text/javascript; charset=utf-8",
+        include_str!("../../web/wgs84.js"),
+    ),
+    (
+        "geo-overlay.js",
+        "text/javascript; charset=utf-8",
+        include_str!("../../web/geo-overlay.js"),
+    ),
 ];
 
 fn file(name: &str) -> Response {

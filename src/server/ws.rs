@@ -83,6 +83,8 @@ struct PoseFrame {
     v: f64,
     r: f64,
     #[serde(default)]
+    controlled: Option<bool>,
+    #[serde(default)]
     telemetry: Option<serde_json::Value>,
 }
 
@@ -103,6 +105,7 @@ fn parse(text: &str) -> Result<VesselMessage, serde_json::Error> {
             u,
             v,
             r,
+            controlled,
             telemetry,
         }) => Ok(VesselMessage::Pose(PoseDocument {
             t,
@@ -112,6 +115,7 @@ fn parse(text: &str) -> Result<VesselMessage, serde_json::Error> {
             u,
             v,
             r,
+            controlled,
             telemetry,
         })),
         Err(_) => serde_json::from_str(text),
@@ -124,12 +128,13 @@ async fn run_link(mut socket: WebSocket, app: AppState) {
         _ = app.shutdown.cancelled() => return,
         first = tokio::time::timeout(Duration::from_secs(10), socket.recv()) => first,
     };
-    let (id, actuator) = match hello {
+    let (id, actuator, astern) = match hello {
         Ok(Some(Ok(Message::Text(t)))) => match parse(&t) {
             Ok(VesselMessage::Hello {
                 vessel,
                 protocol,
                 actuator,
+                astern,
             }) => {
                 if protocol != 1 {
                     return refuse(
@@ -148,7 +153,7 @@ async fn run_link(mut socket: WebSocket, app: AppState) {
                     )
                     .await;
                 }
-                (vessel, actuator)
+                (vessel, actuator, astern)
             }
             Ok(VesselMessage::Pose(_)) => {
                 return refuse(socket, error("protocol", "a pose before hello")).await;
@@ -170,6 +175,7 @@ async fn run_link(mut socket: WebSocket, app: AppState) {
             id: id.clone(),
             link,
             actuator,
+            astern: astern.unwrap_or(true),
             tx,
             poses,
             reply: reply_tx,

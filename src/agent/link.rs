@@ -1,0 +1,186 @@
+//! One vessel's link to the coordinator (SPEC §3, `/api/v1/vessels/link`),
+//! shared by the simulated vessels and the MAVLink bridge.
+//!
+//! The vessel side publishes its newest pose in a `watch` and reads commands
+//! from a channel; this task does the rest: connect (with the bearer token),
+//! say hello, send every new pose, hand over every command, and reconnect
+//! with exponential backoff and jitter when the link drops. A pose that
+//! arrives while the link is down is not queued: only the newest matters.
+//!
+//! Invariants: the vessel never waits on the link (poses are a `watch`,
+//! commands are dropped rather than queued when the vessel is behind); the
+//! task ends only on `shutdown` (saying goodbye with a close frame) or when
+//! the URL is unusable.
+
+use std::time::Duration;
+
+use futures_util::{SinkExt, StreamExt};
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use tokio::sync::{mpsc, watch};
+use tokio_tungstenite::tungstenite::Message;
+use tokio_util::sync::CancellationToken;
+
+use crate::protocol::{CommandDocument, CoordinatorMessage, PoseDocument, VesselMessage};
+
+/// Where and as whom a link connects.
+#[derive(Debug, Clone)]
+pub struct LinkConfig {
+    /// `ws://host:port/api/v1/vessels/link`.
+    pub url: String,
+    /// Sent as `Authorization: Bearer TOKEN`.
+    pub token: Option<String>,
+    /// The vessel's id, said in the hello.
+    pub vessel: String,
+    /// Seeds the reconnection jitter.
+    pub seed: u64,
+    /// Said in the hello: `Some(false)` for a vessel that cannot thrust
+    /// astern.
+    pub astern: Option<bool>,
+}
+
+/// The WebSocket URL of a coordinator's vessel link from its base URL
+/// (`http://host:port` or `ws://host:port` → `ws://host:port/api/v1/vessels/link`);
+/// `None` for any other scheme.
+pub fn link_url(server: &str) -> Option<String> {
+    let base = server.trim_end_matches('/');
+    let ws = if let Some(rest) = base.strip_prefix("http://") {
+        format!("ws://{rest}")
+    } else if let Some(rest) = base.strip_prefix("https://") {
+        format!("wss://{rest}")
+    } else if base.starts_with("ws://") || base.starts_with("wss://") {
+        base.to_string()
+    } else {
+        return None;
+    };
+    Some(format!("{ws}/api/v1/vessels/link"))
+}
+
+fn request(
+    config: &LinkConfig,
+) -> Result<
+    tokio_tungstenite::tungstenite::handshake::client::Request,
+    tokio_tungstenite::tungstenite::Error,
+> {
+    use tokio_tungstenite::tungstenite::client::IntoClientRequest;
+    let mut request = config.url.as_str().into_client_request()?;
+    if let Some(token) = &config.token
+        && let Ok(value) = format!("Bearer {token}").parse()
+    {
+        request.headers_mut().insert("authorization", value);
+    }
+    Ok(request)
+}
+
+fn text<T: serde::Serialize>(value: &T) -> Message {
+    Message::text(serde_json::to_string(value).expect("protocol messages serialize"))
+}
+
+/// Keeps the link up until `shutdown`.
+pub async fn run(
+    config: LinkConfig,
+    mut poses: watch::Receiver<Option<PoseDocument>>,
+    commands: mpsc::Sender<CommandDocument>,
+    shutdown: CancellationToken,
+) {
+    let mut rng = ChaCha8Rng::seed_from_u64(config.seed);
+    let mut backoff = Duration::from_millis(100);
+    while !shutdown.is_cancelled() {
+        let request = match request(&config) {
+            Ok(r) => r,
+            Err(e) => {
+                tracing::error!(url = %config.url, error = %e, "bad coordinator URL");
+                return;
+            }
+        };
+        let connected = tokio::select! {
+            _ = shutdown.cancelled() => return,
+            c = tokio_tungstenite::connect_async(request) => c,
+        };
+        let Ok((socket, _)) = connected else {
+            let wait = backoff.mul_f64(rng.random_range(0.5..1.5));
+            tokio::select! {
+                _ = shutdown.cancelled() => return,
+                _ = tokio::time::sleep(wait) => {}
+            }
+            backoff = (backoff * 2).min(Duration::from_secs(5));
+            continue;
+        };
+        backoff = Duration::from_millis(100);
+        let (mut sink, mut stream) = socket.split();
+        let hello = VesselMessage::Hello {
+            vessel: config.vessel.clone(),
+            protocol: 1,
+            actuator: None,
+            astern: config.astern,
+        };
+        if sink.send(text(&hello)).await.is_err() {
+            continue;
+        }
+        // The pose current at connection goes out at once, not only the
+        // next one.
+        poses.mark_changed();
+        loop {
+            tokio::select! {
+                _ = shutdown.cancelled() => {
+                    let _ = sink.send(Message::Close(None)).await;
+                    return;
+                }
+                changed = poses.changed() => {
+                    if changed.is_err() {
+                        // The vessel is gone: nothing more to report.
+                        let _ = sink.send(Message::Close(None)).await;
+                        return;
+                    }
+                    let pose = poses.borrow_and_update().clone();
+                    if let Some(pose) = pose
+                        && sink.send(text(&VesselMessage::Pose(pose))).await.is_err()
+                    {
+                        break;
+                    }
+                }
+                frame = stream.next() => match frame {
+                    Some(Ok(Message::Text(t))) => match serde_json::from_str::<CoordinatorMessage>(&t) {
+                        Ok(CoordinatorMessage::Command(c)) => {
+                            // A vessel behind on its commands wants the
+                            // next one, not a backlog.
+                            let _ = commands.try_send(c);
+                        }
+                        Ok(CoordinatorMessage::Welcome { .. }) => {}
+                        Ok(CoordinatorMessage::Error { code, message }) if code == "shutting_down" => {
+                            tracing::info!(vessel = %config.vessel, %message, "coordinator stopping");
+                        }
+                        Ok(CoordinatorMessage::Error { code, message }) => {
+                            tracing::warn!(vessel = %config.vessel, %code, %message, "coordinator error");
+                        }
+                        Err(e) => tracing::warn!(vessel = %config.vessel, error = %e, "unreadable frame"),
+                    },
+                    Some(Ok(Message::Close(_))) | None | Some(Err(_)) => break,
+                    Some(Ok(_)) => {}
+                },
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn link_urls() {
+        assert_eq!(
+            link_url("http://127.0.0.1:8090/").unwrap(),
+            "ws://127.0.0.1:8090/api/v1/vessels/link"
+        );
+        assert_eq!(
+            link_url("https://fleet.example").unwrap(),
+            "wss://fleet.example/api/v1/vessels/link"
+        );
+        assert_eq!(
+            link_url("ws://[::1]:80").unwrap(),
+            "ws://[::1]:80/api/v1/vessels/link"
+        );
+        assert!(link_url("127.0.0.1:8090").is_none());
+    }
+}

@@ -1,0 +1,62 @@
+//! The real `seacover serve` binary on port 0, as an operator runs it.
+
+use std::io::{BufRead, BufReader};
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+use std::time::Duration;
+
+use seacover::protocol::MissionDocument;
+
+/// `seacover serve` on port 0 with this data directory and configuration.
+pub fn serve_command(data: &Path, config: &Path) -> Command {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_seacover"));
+    command
+        .args(["serve", "--bind", "127.0.0.1:0", "--data-dir"])
+        .arg(data)
+        .arg("--config")
+        .arg(config)
+        .stdout(Stdio::piped());
+    command
+}
+
+/// Starts `command` and returns it with the address it printed.
+pub fn start(mut command: Command) -> (Child, String) {
+    let mut child = command.spawn().unwrap();
+    let mut line = String::new();
+    BufReader::new(child.stdout.take().unwrap())
+        .read_line(&mut line)
+        .unwrap();
+    assert!(line.starts_with("seacover: serving on"), "{line:?}");
+    let addr = line.trim().rsplit("http://").next().unwrap().to_string();
+    (child, addr)
+}
+
+/// Starts the real binary on port 0 and returns it with its address.
+pub fn spawn_server(data: &Path, config: &Path) -> (Child, String) {
+    let mut command = serve_command(data, config);
+    command.stderr(Stdio::null());
+    start(command)
+}
+
+pub async fn mission(http: &reqwest::Client, addr: &str) -> MissionDocument {
+    http.get(format!("http://{addr}/api/v1/mission"))
+        .send()
+        .await
+        .unwrap()
+        .json()
+        .await
+        .unwrap()
+}
+
+/// Polls `check` every 100 ms for up to `secs`.
+pub async fn eventually<F, Fut>(secs: u64, what: &str, mut check: F)
+where
+    F: FnMut() -> Fut,
+    Fut: std::future::Future<Output = bool>,
+{
+    let deadline = tokio::time::Instant::now() + Duration::from_secs(secs);
+    while !check().await {
+        assert!(tokio::time::Instant::now() < deadline, "timed out: {what}");
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
+}
