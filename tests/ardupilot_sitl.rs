@@ -393,6 +393,45 @@ async fn wait_for<T>(limit: Duration, mut check: impl AsyncFnMut() -> Option<T>)
     }
 }
 
+/// Waits (10 s at most) until every boat reports below 0.3 m/s, then says
+/// when that was, from ArduPilot's own record rather than from when this
+/// loop looked (at speedup 4 a late look is four times as late): the first
+/// moment after `since` (each boat's clock) at which every boat's newest
+/// report said below 0.3 m/s [s].
+async fn all_stopped(stations: &[Station], since: &[u32]) -> f64 {
+    wait_for(Duration::from_secs(10), async || {
+        stations
+            .iter()
+            .all(|s| s.seen(Seen::speed) < 0.3)
+            .then_some(())
+    })
+    .await
+    .expect("every boat below 0.3 m/s");
+    let records: Vec<BTreeMap<u32, f64>> = stations
+        .iter()
+        .zip(since)
+        .map(|(s, k)| {
+            s.seen(|s| {
+                s.positions
+                    .range(*k..)
+                    .map(|(t, p)| (t - k, f64::from(p.vx).hypot(f64::from(p.vy)) / 100.0))
+                    .collect()
+            })
+        })
+        .collect();
+    let mut moments: Vec<u32> = records.iter().flat_map(|r| r.keys().copied()).collect();
+    moments.sort_unstable();
+    moments
+        .into_iter()
+        .find(|&after| {
+            records
+                .iter()
+                .all(|r| r.range(..=after).next_back().is_some_and(|(_, v)| *v < 0.3))
+        })
+        .map(|after| f64::from(after) / 1000.0)
+        .expect("every boat's record shows it below 0.3 m/s")
+}
+
 /// Waits (20 s at most) until some boat goes faster than `speed` [m/s].
 async fn under_way(stations: &[Station], speed: f64, what: &str) {
     wait_for(Duration::from_secs(20), async || {
@@ -745,21 +784,32 @@ async fn four_boats_converge_follow_conventions_yield_to_the_operator_and_stop_w
         .unwrap();
     assert!(moved.status().is_success());
     under_way(&stations, 1.0, "the fleet under way to the moved object").await;
+
+    // A coordinator that hangs (SIGSTOP: its sockets stay open, nothing
+    // comes): the commands age past 1 s and the boats stop; it wakes and
+    // they go on.
+    let signal = |sig: &str, pid: u32| {
+        let status = Command::new("kill")
+            .args([sig, &pid.to_string()])
+            .status()
+            .unwrap();
+        assert!(status.success());
+    };
+    signal("-STOP", coordinator.child.id());
+    let hung: Vec<u32> = stations.iter().map(|s| s.seen(Seen::clock_ms)).collect();
+    let stopped_hung = all_stopped(&stations, &hung).await;
+    signal("-CONT", coordinator.child.id());
+    println!(
+        "d. coordinator hung (SIGSTOP): every boat below 0.3 m/s within {stopped_hung:.1} s of its clock"
+    );
+    assert!(stopped_hung <= 5.0, "{stopped_hung} s to stop");
+    under_way(&stations, 1.0, "the fleet under way again after the hang").await;
+
     let addr = coordinator.addr.clone();
     let (data, config) = (coordinator.data.clone(), coordinator.config.clone());
     drop(coordinator); // SIGKILL
     let killed: Vec<u32> = stations.iter().map(|s| s.seen(Seen::clock_ms)).collect();
-    let stopped = wait_for(Duration::from_secs(10), async || {
-        stations.iter().all(|s| s.seen(Seen::speed) < 0.3).then(|| {
-            stations
-                .iter()
-                .zip(&killed)
-                .map(|(s, k)| f64::from(s.seen(Seen::clock_ms) - k) / 1000.0)
-                .fold(0.0, f64::max)
-        })
-    })
-    .await
-    .expect("every boat below 0.3 m/s");
+    let stopped = all_stopped(&stations, &killed).await;
     // Twenty-five seconds of the boats' time without a coordinator; then,
     // from ArduPilot's own record, how far each boat was from where it came
     // to rest: on average over the rest of those 25 s, at the end, and at

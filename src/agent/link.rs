@@ -1,8 +1,9 @@
 //! One vessel's link to the coordinator (SPEC §3, `/api/v1/vessels/link`),
 //! shared by the simulated vessels and the MAVLink bridge.
 //!
-//! The vessel side publishes its newest pose in a `watch` and reads commands
-//! from a channel; this task does the rest: connect (with the bearer token),
+//! The vessel side publishes its newest pose in a `watch` and reads
+//! [`Inbound`] messages (commands, and word that the link is lost) from a
+//! channel; this task does the rest: connect (with the bearer token),
 //! say hello, send every new pose, hand over every command, and reconnect
 //! with exponential backoff and jitter when the link drops. A pose that
 //! arrives while the link is down is not queued: only the newest matters.
@@ -22,6 +23,17 @@ use tokio_tungstenite::tungstenite::Message;
 use tokio_util::sync::CancellationToken;
 
 use crate::protocol::{CommandDocument, CoordinatorMessage, PoseDocument, VesselMessage};
+
+/// What the link hands the vessel.
+#[derive(Debug, Clone)]
+pub enum Inbound {
+    /// A command from the coordinator.
+    Command(CommandDocument),
+    /// The connection to the coordinator closed or failed: no command will
+    /// come until it is back. A vessel that must not wait out its command's
+    /// age (a real boat) acts on this at once.
+    Lost,
+}
 
 /// Where and as whom a link connects.
 #[derive(Debug, Clone)]
@@ -80,7 +92,7 @@ fn text<T: serde::Serialize>(value: &T) -> Message {
 pub async fn run(
     config: LinkConfig,
     mut poses: watch::Receiver<Option<PoseDocument>>,
-    commands: mpsc::Sender<CommandDocument>,
+    commands: mpsc::Sender<Inbound>,
     shutdown: CancellationToken,
 ) {
     let mut rng = ChaCha8Rng::seed_from_u64(config.seed);
@@ -144,7 +156,7 @@ pub async fn run(
                         Ok(CoordinatorMessage::Command(c)) => {
                             // A vessel behind on its commands wants the
                             // next one, not a backlog.
-                            let _ = commands.try_send(c);
+                            let _ = commands.try_send(Inbound::Command(c));
                         }
                         Ok(CoordinatorMessage::Welcome { .. }) => {}
                         Ok(CoordinatorMessage::Error { code, message }) if code == "shutting_down" => {
@@ -159,6 +171,14 @@ pub async fn run(
                     Some(Ok(_)) => {}
                 },
             }
+        }
+        // Unlike a command, the loss is not dropped when the vessel is
+        // behind: it is the one message that must arrive (and the vessel
+        // drains its channel within a step). An error means the vessel is
+        // gone, which ends nothing here: shutdown does.
+        tokio::select! {
+            _ = shutdown.cancelled() => return,
+            _ = commands.send(Inbound::Lost) => {}
         }
     }
 }

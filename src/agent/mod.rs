@@ -234,7 +234,12 @@ async fn run_vessel(
                 onboard.advance(period);
                 poses.send_replace(Some(onboard.pose()));
             }
-            Some(c) = incoming.recv() => onboard.command = Some((c, onboard.t)),
+            Some(m) = incoming.recv() => match m {
+                link::Inbound::Command(c) => onboard.command = Some((c, onboard.t)),
+                // The simulated hull keeps its own rule for an aging
+                // command (SPEC §3): it needs no word of the loss.
+                link::Inbound::Lost => {}
+            },
         }
     }
     let _ = link.await;

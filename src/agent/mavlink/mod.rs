@@ -461,7 +461,11 @@ async fn run_vehicle(
                 }
             }
             c = commands.recv() => match c {
-                Some(c) => v.on_command(c).into_iter().collect(),
+                Some(link::Inbound::Command(c)) => v.on_command(c).into_iter().collect(),
+                Some(link::Inbound::Lost) => {
+                    tracing::warn!(%vessel, "coordinator link lost: stopping the boat");
+                    v.on_link_lost()
+                }
                 None => break,
             },
             changed = frame.changed() => {

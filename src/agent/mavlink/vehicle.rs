@@ -16,7 +16,8 @@
 //! - while controlled, every fresh command becomes one velocity + yaw-rate
 //!   setpoint (SET_POSITION_TARGET_LOCAL_NED, MAV_FRAME_BODY_NED, type mask
 //!   1511); once the newest command is more than [`STALE_MS`] old on the
-//!   vehicle's own clock (or there has been none), the vehicle is told to
+//!   vehicle's own clock (or there has been none, or the coordinator's
+//!   link has closed since: [`Vehicle::on_link_lost`]), the vehicle is told to
 //!   stop (speed and turn rate zero) and, once below [`SETTLED`], to hold
 //!   where it stopped (a position target there, repeated each second):
 //!   never an old velocity;
@@ -264,6 +265,18 @@ impl Vehicle {
         let (c, _) = self.command.as_ref().expect("just set");
         let (u_d, r_d) = (c.u_d, c.r_d);
         Some(self.velocity_setpoint(u_d, r_d))
+    }
+
+    /// The coordinator's link closed: the newest command is as good as
+    /// stale now, so the boat brakes at once instead of driving on for the
+    /// rest of [`STALE_MS`] (a killed coordinator closes its sockets at
+    /// once; a silent one is still caught by the age).
+    pub fn on_link_lost(&mut self) -> Vec<MavMessage> {
+        if self.command.is_none() {
+            return Vec::new();
+        }
+        self.command = None;
+        self.hold_if_stale()
     }
 
     /// Speed `u_d` along the bow and yaw rate `r_d` (seacover's sign).
@@ -607,6 +620,36 @@ mod tests {
         // A new command ends the hold.
         assert!(v.on_command(command(1.0, 0.1)).is_some());
         assert!(v.on_position(&position(3800)).unwrap().1.is_empty());
+    }
+
+    #[test]
+    fn a_lost_link_brakes_at_once() {
+        let mut v = vehicle(false);
+        v.on_heartbeat(&heartbeat(GUIDED, true));
+        v.on_attitude(&attitude(1000)).unwrap();
+        v.on_position(&position(1000)).unwrap();
+        assert!(v.on_command(command(1.5, 0.2)).is_some());
+        // 0.1 s after the command, still at 2 m/s: the link drops.
+        v.on_position(&position(1100)).unwrap();
+        let out = v.on_link_lost();
+        let [MavMessage::SET_POSITION_TARGET_LOCAL_NED(brake)] = out.as_slice() else {
+            panic!("expected a stop, got {out:?}")
+        };
+        assert_eq!((brake.vx, brake.yaw_rate), (0.0, 0.0));
+        // The next position keeps braking; a second loss adds nothing.
+        let (_, out) = v.on_position(&position(1200)).unwrap();
+        assert!(matches!(
+            out.as_slice(),
+            [MavMessage::SET_POSITION_TARGET_LOCAL_NED(_)]
+        ));
+        assert!(v.on_link_lost().is_empty());
+        // Not under control: a loss sends nothing.
+        let mut held = vehicle(false);
+        held.on_heartbeat(&heartbeat(4, true));
+        held.on_attitude(&attitude(1000)).unwrap();
+        held.on_position(&position(1000)).unwrap();
+        held.on_command(command(1.0, 0.0));
+        assert!(held.on_link_lost().is_empty());
     }
 
     #[test]
