@@ -10,7 +10,9 @@
 //!   types and an evaluation back into its document;
 //! - [`georef`]: WGS84 documents (GeoJSON, lat/lon) in and GeoJSON out,
 //!   through the mission's local plane;
-//! - [`load`]: `seacover bench load`, a load benchmark of a running coordinator.
+//! - [`load`]: `seacover bench load`, a load benchmark of a running coordinator;
+//! - [`recorder`]: every run recorded as MCAP on a thread of its own, and
+//!   read back (replay, `seacover record`).
 
 pub mod agent;
 pub mod control;
@@ -19,6 +21,7 @@ pub mod geometry;
 pub mod georef;
 pub mod load;
 pub mod protocol;
+pub mod recorder;
 pub mod scenario;
 pub mod server;
 pub mod sim;

@@ -62,6 +62,16 @@ enum Command {
         /// (see examples/seacover.toml).
         #[arg(long)]
         config: Option<PathBuf>,
+        /// Record the run as MCAP in DATA_DIR/recordings/ (`on`) or not
+        /// (`off`).
+        #[arg(long, value_enum, default_value = "on")]
+        record: OnOff,
+        /// Start a new recording file after this many MiB.
+        #[arg(long, default_value_t = 256)]
+        record_max_mb: u64,
+        /// Start a new recording file after this many minutes.
+        #[arg(long, default_value_t = 60)]
+        record_max_minutes: u64,
     },
     /// Run simulated vessels, each on its own link to a coordinator; or,
     /// with --mavlink, bridge real autopilots (ArduPilot boats) onto it.
@@ -111,6 +121,25 @@ enum Command {
         /// Bearer token (the demo's own vessels use it too).
         #[arg(long, env = "SEACOVER_TOKEN", hide_env_values = true)]
         token: Option<String>,
+        /// Record the run as MCAP files in this directory.
+        #[arg(long, value_name = "DIR")]
+        record: Option<PathBuf>,
+    },
+    /// Serve the dashboard over a recording, read-only: play, pause, speed
+    /// and seek from its replay bar or `PUT /api/v1/replay`.
+    Replay {
+        /// An MCAP recording (of `serve`, `demo --record` or `sim --record`).
+        file: PathBuf,
+        #[arg(long, default_value = "127.0.0.1:8080")]
+        bind: String,
+        /// Recording seconds per wall-clock second.
+        #[arg(long, default_value_t = 1.0)]
+        speed: f64,
+    },
+    /// Inspect recordings.
+    Record {
+        #[command(subcommand)]
+        what: RecordCommand,
     },
     /// Benchmarks against a running coordinator.
     Bench {
@@ -165,7 +194,45 @@ enum Command {
         /// Skip the figures (CSV and JSON only).
         #[arg(long)]
         no_figures: bool,
+        /// Also record the run as MCAP: the coordinator's channels plus each
+        /// vessel's truth, disturbance and observer estimate.
+        #[arg(long, value_name = "FILE.mcap")]
+        record: Option<PathBuf>,
     },
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum OnOff {
+    On,
+    Off,
+}
+
+#[derive(Subcommand)]
+enum RecordCommand {
+    /// Duration, vessels, channels with message counts, H at start and end,
+    /// gaps in the data.
+    Info {
+        file: PathBuf,
+        /// As JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// One channel's messages as CSV (coverage: H and each vessel's E over
+    /// time; pose; command; sim/vessel) or JSON lines (any channel), on
+    /// standard output.
+    Export {
+        file: PathBuf,
+        #[arg(long, default_value = "/seacover/coverage")]
+        channel: String,
+        #[arg(long, value_enum, default_value = "csv")]
+        format: ExportFormat,
+    },
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum ExportFormat {
+    Csv,
+    Jsonl,
 }
 
 #[derive(Subcommand)]
@@ -245,7 +312,22 @@ fn main() -> ExitCode {
             token,
             data_dir,
             config,
-        } => report(runtime().block_on(serve(&bind, time_warp, token, data_dir, config))),
+            record,
+            record_max_mb,
+            record_max_minutes,
+        } => {
+            let record = (record == OnOff::On).then(|| seacover::recorder::RecorderConfig {
+                target: seacover::recorder::Target::Directory {
+                    dir: data_dir.join("recordings"),
+                    max_bytes: record_max_mb.saturating_mul(1024 * 1024),
+                    max_duration: std::time::Duration::from_secs(
+                        record_max_minutes.saturating_mul(60),
+                    ),
+                },
+                wall_clock: true,
+            });
+            report(runtime().block_on(serve(&bind, time_warp, token, data_dir, config, record)))
+        }
         Command::Agent {
             server,
             mavlink,
@@ -281,7 +363,22 @@ fn main() -> ExitCode {
             bind,
             time_warp,
             token,
-        } => report(runtime().block_on(demo(&bind, time_warp, token))),
+            record,
+        } => report(runtime().block_on(demo(&bind, time_warp, token, record))),
+        Command::Replay { file, bind, speed } => {
+            report(runtime().block_on(replay(&bind, file, speed)))
+        }
+        Command::Record {
+            what: RecordCommand::Info { file, json },
+        } => report(record_info(&file, json)),
+        Command::Record {
+            what:
+                RecordCommand::Export {
+                    file,
+                    channel,
+                    format,
+                },
+        } => report(record_export(&file, &channel, format)),
         Command::Bench {
             kind:
                 BenchKind::Load {
@@ -331,6 +428,7 @@ fn main() -> ExitCode {
             seed,
             disturbance,
             no_figures,
+            record,
         } => match sim(
             SimArgs {
                 scenario: &scenario,
@@ -346,6 +444,7 @@ fn main() -> ExitCode {
             },
             &out,
             !no_figures,
+            record.as_deref(),
         ) {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {
@@ -421,6 +520,7 @@ async fn serve(
     token: Option<String>,
     data_dir: PathBuf,
     config: Option<PathBuf>,
+    record: Option<seacover::recorder::RecorderConfig>,
 ) -> anyhow::Result<()> {
     check_warp(time_warp)?;
     let settings = match &config {
@@ -439,8 +539,50 @@ async fn serve(
         data_dir: Some(data_dir),
         write_rate: settings.write_rate,
         write_burst: settings.write_burst,
+        record,
     };
     seacover::server::serve(listener, config, stop).await?;
+    Ok(())
+}
+
+async fn replay(bind: &str, file: PathBuf, speed: f64) -> anyhow::Result<()> {
+    let (listener, stop) = listen(bind).await?;
+    println!(
+        "seacover: replaying {} on http://{}",
+        file.display(),
+        listener.local_addr()?
+    );
+    seacover::server::replay::serve(listener, file, speed, stop).await?;
+    Ok(())
+}
+
+fn record_info(file: &std::path::Path, json: bool) -> anyhow::Result<()> {
+    use seacover::recorder::{inspect, reader::Recording};
+    let info = inspect::info(&Recording::open(file)?)?;
+    let mut out = std::io::stdout().lock();
+    if json {
+        serde_json::to_writer_pretty(&mut out, &info)?;
+        println!();
+    } else {
+        inspect::print_info(&info, &mut out)?;
+    }
+    Ok(())
+}
+
+fn record_export(
+    file: &std::path::Path,
+    channel: &str,
+    format: ExportFormat,
+) -> anyhow::Result<()> {
+    use seacover::recorder::{inspect, reader::Recording};
+    let format = match format {
+        ExportFormat::Csv => inspect::Format::Csv,
+        ExportFormat::Jsonl => inspect::Format::Jsonl,
+    };
+    let mut out = std::io::BufWriter::new(std::io::stdout().lock());
+    inspect::export(&Recording::open(file)?, channel, format, &mut out)?;
+    use std::io::Write;
+    out.flush()?;
     Ok(())
 }
 
@@ -520,15 +662,29 @@ async fn agent(
     Ok(())
 }
 
-async fn demo(bind: &str, time_warp: f64, token: Option<String>) -> anyhow::Result<()> {
+async fn demo(
+    bind: &str,
+    time_warp: f64,
+    token: Option<String>,
+    record: Option<PathBuf>,
+) -> anyhow::Result<()> {
     use seacover::agent::{AgentConfig, paper_vessels, run_fleet};
     use seacover::control::model::VesselParams;
     check_warp(time_warp)?;
     let (listener, stop) = listen(bind).await?;
     let addr = listener.local_addr()?;
+    let recording = record.as_ref().map(|dir| dir.display().to_string());
     let config = seacover::server::ServeConfig {
         time_warp,
         token: token.clone(),
+        record: record.map(|dir| seacover::recorder::RecorderConfig {
+            target: seacover::recorder::Target::Directory {
+                dir,
+                max_bytes: 256 * 1024 * 1024,
+                max_duration: std::time::Duration::from_secs(3600),
+            },
+            wall_clock: true,
+        }),
         ..Default::default()
     };
     let server = tokio::spawn(seacover::server::serve(listener, config, stop.clone()));
@@ -547,6 +703,9 @@ async fn demo(bind: &str, time_warp: f64, token: Option<String>) -> anyhow::Resu
     println!("seacover demo: coordinator with 8 vessels (usv-1 … usv-8), mission in memory");
     println!("  dashboard: http://{addr}/");
     println!("  coverage: http://{addr}/api/v1/coverage   vessels: http://{addr}/api/v1/vessels");
+    if let Some(dir) = recording {
+        println!("  recording: {dir}/ (MCAP; `seacover replay FILE` plays it back)");
+    }
     println!("  stop with ctrl-c");
     fleet.await?;
     server.await??;
@@ -602,7 +761,12 @@ struct SimArgs<'a> {
     disturbance: &'a str,
 }
 
-fn sim(args: SimArgs, out: &std::path::Path, figures: bool) -> anyhow::Result<()> {
+fn sim(
+    args: SimArgs,
+    out: &std::path::Path,
+    figures: bool,
+    record: Option<&std::path::Path>,
+) -> anyhow::Result<()> {
     use anyhow::{Context, bail};
     use seacover::control::guidance::GuidanceMode;
     use seacover::control::model::VesselParams;
@@ -666,7 +830,12 @@ fn sim(args: SimArgs, out: &std::path::Path, figures: bool) -> anyhow::Result<()
         );
         bar
     });
-    let (summary, safety) = run_to_dir(&config, out, figures, |f| {
+    let document = match record {
+        Some(_) => Some(seacover::sim::load_scenario_document(scenario)?),
+        None => None,
+    };
+    let record = record.zip(document.as_ref());
+    let (summary, safety) = run_to_dir(&config, out, figures, record, |f| {
         if let Some(bar) = &bar {
             bar.set_position((f * 1000.0) as u64);
         }

@@ -614,6 +614,15 @@ pub struct CoverageDocument {
     pub cells: Vec<CellDocument>,
 }
 
+/// The coordinator's newest state as readers get it: what the dashboard
+/// stream sends and what `GET /api/v1/coverage` answers (not itself a wire
+/// document).
+#[derive(Debug, Clone)]
+pub struct Snapshot {
+    pub document: SnapshotDocument,
+    pub coverage: CoverageDocument,
+}
+
 /// What the dashboard stream sends.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
 pub struct SnapshotDocument {

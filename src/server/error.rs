@@ -86,6 +86,9 @@ impl From<ScenarioError> for ApiError {
 impl IntoResponse for ApiError {
     fn into_response(self) -> Response {
         let mut response = (self.status(), Json(self.document())).into_response();
+        response
+            .extensions_mut()
+            .insert(super::events::ErrorCode(self.code()));
         if let ApiError::RateLimited(_) = self {
             // The bucket refills one write per 1/rate s; one second is a
             // safe, simple hint.

@@ -10,8 +10,10 @@ pub mod api;
 pub mod auth;
 pub mod config;
 pub mod error;
+pub mod events;
 pub mod metrics;
 pub mod openapi;
+pub mod replay;
 pub mod state;
 pub mod store;
 pub mod web;
@@ -32,6 +34,7 @@ use tokio::sync::{mpsc, watch};
 use tokio_util::sync::CancellationToken;
 use tokio_util::task::TaskTracker;
 
+use crate::recorder::{MissionClock, Recorder, RecorderConfig};
 use state::{Coordinator, Mission, Request, Snapshot, TickSettings};
 
 /// Shared by every handler; cheap to clone.
@@ -47,6 +50,10 @@ pub struct AppState {
     /// One token bucket for every write of every client: writes are an
     /// operator's, and each costs an fsync.
     pub writes: Arc<auth::WriteLimiter>,
+    /// Where links hand their poses and events (off: does nothing).
+    pub recorder: Recorder,
+    /// Mission time for what links and handlers record.
+    pub clock: MissionClock,
 }
 
 /// Server settings.
@@ -66,6 +73,8 @@ pub struct ServeConfig {
     /// Writes per second allowed, and the burst.
     pub write_rate: u32,
     pub write_burst: u32,
+    /// Where the run is recorded; `None`: not recorded.
+    pub record: Option<RecorderConfig>,
 }
 
 impl Default for ServeConfig {
@@ -78,6 +87,7 @@ impl Default for ServeConfig {
             data_dir: None,
             write_rate: 50,
             write_burst: 100,
+            record: None,
         }
     }
 }
@@ -143,6 +153,10 @@ pub fn router(app: AppState) -> Router {
         .route("/api/v1/stream", get(ws::stream))
         .layer(axum::middleware::map_response(error::json_too_large))
         .layer(DefaultBodyLimit::max(MAX_BODY))
+        .layer(axum::middleware::from_fn_with_state(
+            app.clone(),
+            events::record_rejections,
+        ))
         .with_state(app)
 }
 
@@ -185,6 +199,14 @@ pub async fn serve(
         }
         None => (config.mission, None),
     };
+    let (recorder, recording) = match config.record {
+        Some(c) => {
+            let (r, t) = Recorder::start(c, false);
+            (r, Some(t))
+        }
+        None => (Recorder::off(), None),
+    };
+    let clock = MissionClock::first_tick_now(config.time_warp, mission.tick_hz);
     let (coordinator, snapshot) = Coordinator::new(
         mission,
         TickSettings {
@@ -193,6 +215,7 @@ pub async fn serve(
         },
         store,
     );
+    let coordinator = coordinator.recording(recorder.clone(), clock);
     let (requests, rx) = mpsc::channel(1024);
     let tracker = TaskTracker::new();
     let tick = tokio::spawn(coordinator.run(rx, shutdown.clone()));
@@ -204,6 +227,8 @@ pub async fn serve(
         shutdown: shutdown.clone(),
         next_link: Arc::new(AtomicU64::new(1)),
         writes: Arc::new(auth::write_limiter(config.write_rate, config.write_burst)),
+        recorder: recorder.clone(),
+        clock,
     };
     let signal = shutdown.clone();
     // Commands and poses are small frames that must leave at once: without
@@ -214,11 +239,18 @@ pub async fn serve(
             tracing::warn!(error = %e, "TCP_NODELAY could not be set on a connection");
         }
     });
-    axum::serve(listener, router(app))
+    // With the peers' addresses, for the recording's events.
+    let service = router(app).into_make_service_with_connect_info::<SocketAddr>();
+    axum::serve(listener, service)
         .with_graceful_shutdown(async move { signal.cancelled().await })
         .await?;
     tracker.close();
     let _ = tokio::time::timeout(Duration::from_millis(1500), tracker.wait()).await;
     let _ = tick.await;
+    // The tick task has recorded the shutdown: finish the file.
+    if let Some(thread) = recording {
+        recorder.finish();
+        let _ = tokio::task::spawn_blocking(move || thread.join()).await;
+    }
     Ok(())
 }

@@ -21,7 +21,7 @@
 //!   written (or half a period later at most), never while the links are
 //!   writing them.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::sync::Arc;
 use std::time::Duration;
 
@@ -45,6 +45,8 @@ use crate::protocol::{
     MissionDocument, OriginDocument, PoseDocument, RegionDocument, RegionInput, RiskDocument,
     RiskObjectDocument, RiskObjectInput, SafetyDocument, SnapshotDocument, VesselStatusDocument,
 };
+use crate::recorder::messages::{EventKind, EventRecord};
+use crate::recorder::{Entry as RecorderEntry, MissionClock, Recorder};
 use crate::scenario::{Scenario, ScenarioError, evaluation_document};
 
 /// The mission: what to cover and how.
@@ -153,31 +155,14 @@ impl Mission {
     }
 
     pub fn document(&self) -> MissionDocument {
-        let g = &self.guidance;
         MissionDocument {
             origin: self.origin,
             region: self.region_doc.clone(),
             risk: self.risk_doc.clone(),
             actuator: self.actuator,
-            guidance: GuidanceDocument {
-                mode: g.mode.name().to_string(),
-                k_r1: g.k_r1,
-                k_r2: g.k_r2,
-                b1: g.b1,
-                k_u1: g.k_u1,
-                k_u2: g.k_u2,
-                b2: g.b2,
-                arrival_radius: g.arrival_radius,
-                max_speed: g.max_speed,
-                max_yaw_rate: g.max_yaw_rate,
-                filter_time: g.filter_time,
-            },
+            guidance: guidance_document(&self.guidance),
             tick_hz: self.tick_hz,
-            safety: SafetyDocument {
-                filter: self.safety.filter,
-                safety_distance: self.safety.safety_distance,
-                shore_distance: self.safety.shore_distance,
-            },
+            safety: safety_document(&self.safety),
         }
     }
 
@@ -396,6 +381,32 @@ pub fn safety_params(doc: &SafetyDocument) -> SafetyParams {
     }
 }
 
+/// The document of guidance gains ([`guidance_gains`] reads it back).
+pub fn guidance_document(g: &GuidanceGains) -> GuidanceDocument {
+    GuidanceDocument {
+        mode: g.mode.name().to_string(),
+        k_r1: g.k_r1,
+        k_r2: g.k_r2,
+        b1: g.b1,
+        k_u1: g.k_u1,
+        k_u2: g.k_u2,
+        b2: g.b2,
+        arrival_radius: g.arrival_radius,
+        max_speed: g.max_speed,
+        max_yaw_rate: g.max_yaw_rate,
+        filter_time: g.filter_time,
+    }
+}
+
+/// The document of safety parameters ([`safety_params`] reads it back).
+pub fn safety_document(p: &SafetyParams) -> SafetyDocument {
+    SafetyDocument {
+        filter: p.filter,
+        safety_distance: p.safety_distance,
+        shore_distance: p.shore_distance,
+    }
+}
+
 pub fn guidance_gains(doc: &GuidanceDocument) -> Result<GuidanceGains, ApiError> {
     let mode = GuidanceMode::parse(&doc.mode).ok_or_else(|| {
         ApiError::Invalid(format!(
@@ -441,12 +452,7 @@ pub fn guidance_gains(doc: &GuidanceDocument) -> Result<GuidanceGains, ApiError>
     })
 }
 
-/// The newest state, for readers.
-#[derive(Debug, Clone)]
-pub struct Snapshot {
-    pub document: SnapshotDocument,
-    pub coverage: CoverageDocument,
-}
+pub use crate::protocol::Snapshot;
 
 /// Settings of the tick task.
 #[derive(Debug, Clone, Copy)]
@@ -536,6 +542,14 @@ pub struct Coordinator {
     /// Where accepted changes are made durable before they are answered;
     /// `None` keeps the mission in memory only (the demo).
     store: Option<Store>,
+    /// Where ticks, mission changes and fleet events are recorded.
+    recorder: Recorder,
+    /// When tick 1 is due (its origin plus one period).
+    clock: Option<MissionClock>,
+    /// The previous tick's partition, to see who leaves it and who returns.
+    live_before: BTreeSet<String>,
+    /// Vessels that left the partition by falling silent, until heard again.
+    lapsed: BTreeSet<String>,
 }
 
 impl Coordinator {
@@ -568,16 +582,35 @@ impl Coordinator {
                 tick: 0,
                 snapshot: tx,
                 store,
+                recorder: Recorder::off(),
+                clock: None,
+                live_before: BTreeSet::new(),
+                lapsed: BTreeSet::new(),
             },
             rx,
         )
+    }
+
+    /// Records to `recorder`, with ticks due on `clock`; the mission as it
+    /// starts is the recording's first message.
+    pub fn recording(mut self, recorder: Recorder, clock: MissionClock) -> Coordinator {
+        recorder.mission(0.0, self.mission.document());
+        self.recorder = recorder;
+        self.clock = Some(clock);
+        self
     }
 
     /// Runs until `shutdown`; then tells every vessel and returns.
     pub async fn run(mut self, mut requests: mpsc::Receiver<Request>, shutdown: CancellationToken) {
         let period =
             Duration::from_secs_f64(1.0 / (self.mission.tick_hz * self.settings.time_warp));
-        let mut ticker = tokio::time::interval(period);
+        // Tick 1 is due one period after the clock's origin (at once when
+        // there is no clock), so what links record on the clock and what
+        // ticks record agree.
+        let first = self
+            .clock
+            .map_or_else(tokio::time::Instant::now, |c| (c.origin + period).into());
+        let mut ticker = tokio::time::interval_at(first, period);
         ticker.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Skip);
         // Tick N is due at origin + N × period (the interval's first tick,
         // tick 1, fires at once). Published so that a client on the same
@@ -652,6 +685,13 @@ impl Coordinator {
                 );
             }
         }
+        self.recorder
+            .event(EventRecord::new(self.time(), EventKind::Shutdown));
+    }
+
+    /// Mission time of the current tick [s].
+    fn time(&self) -> f64 {
+        self.tick as f64 / self.mission.tick_hz
     }
 
     /// Serves one request; `true` when it published a snapshot.
@@ -733,6 +773,9 @@ impl Coordinator {
                     self.mission = next;
                     Ok(answer)
                 });
+                if outcome.is_ok() {
+                    self.recorder.mission(self.time(), self.mission.document());
+                }
                 let changed = outcome.is_ok();
                 if changed {
                     // Readers see the write at once, not at the next tick.
@@ -747,6 +790,12 @@ impl Coordinator {
             Request::Forget { id, reply } => {
                 let outcome = match self.vessels.remove(&id) {
                     Some(entry) => {
+                        self.recorder.event(
+                            EventRecord::new(self.time(), EventKind::VesselRemoved)
+                                .vessel(id.clone()),
+                        );
+                        self.live_before.remove(&id);
+                        self.lapsed.remove(&id);
                         if let Some(link) = entry.link {
                             let _ = link.tx.try_send(
                                 CoordinatorMessage::Error {
@@ -834,6 +883,7 @@ impl Coordinator {
         self.collect_poses();
         let time = self.tick as f64 / self.mission.tick_hz;
         let live = self.live_ids();
+        self.note_liveness(time, &live);
         let Some(fleet) = self.fleet(&live) else {
             return Published {
                 time,
@@ -935,6 +985,31 @@ impl Coordinator {
             live,
             evaluation: Some(Evaluation { h, cells }),
         }
+    }
+
+    /// Records who left the partition by falling silent (the others take
+    /// their water) and who came back.
+    fn note_liveness(&mut self, time: f64, live: &[String]) {
+        if !self.recorder.is_on() {
+            return;
+        }
+        let now: BTreeSet<String> = live.iter().cloned().collect();
+        for gone in self.live_before.difference(&now) {
+            if self.vessels.contains_key(gone) {
+                self.recorder.event(
+                    EventRecord::new(time, EventKind::LivenessTakeover).vessel(gone.clone()),
+                );
+                self.lapsed.insert(gone.clone());
+            }
+        }
+        for back in now.difference(&self.live_before) {
+            if self.lapsed.remove(back) {
+                self.recorder.event(
+                    EventRecord::new(time, EventKind::LivenessRegained).vessel(back.clone()),
+                );
+            }
+        }
+        self.live_before = now;
     }
 
     /// The second half of a tick, once its commands are on their way: the
@@ -1040,7 +1115,11 @@ impl Coordinator {
             },
             coverage,
         };
-        self.snapshot.send_replace(Arc::new(snapshot));
+        let snapshot = Arc::new(snapshot);
+        if self.recorder.is_on() {
+            self.recorder.record(RecorderEntry::Tick(snapshot.clone()));
+        }
+        self.snapshot.send_replace(snapshot);
     }
 }
 

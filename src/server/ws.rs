@@ -7,6 +7,7 @@
 //! protocol errors (a pose before hello, a frame over 64 KiB, repeated
 //! garbage) close that link only.
 
+use std::net::SocketAddr;
 use std::sync::atomic::Ordering;
 use std::time::Duration;
 
@@ -17,8 +18,10 @@ use futures_util::{SinkExt, StreamExt};
 use tokio::sync::{mpsc, oneshot, watch};
 
 use super::AppState;
+use super::events::Peer;
 use super::state::{Outgoing, Request};
 use crate::protocol::{CoordinatorMessage, PoseDocument, VesselMessage};
+use crate::recorder::messages::{EventKind, EventRecord};
 use crate::scenario::valid_id;
 
 /// Largest frame accepted on either socket.
@@ -51,12 +54,32 @@ fn error(code: &str, message: impl Into<String>) -> CoordinatorMessage {
     }
 }
 
-pub async fn link(ws: WebSocketUpgrade, State(app): State<AppState>) -> Response {
+pub async fn link(ws: WebSocketUpgrade, Peer(peer): Peer, State(app): State<AppState>) -> Response {
     let tracker = app.tracker.clone();
     ws.max_message_size(MAX_FRAME)
         .max_frame_size(MAX_FRAME)
         .read_buffer_size(READ_BUFFER)
-        .on_upgrade(move |socket| tracker.track_future(run_link(socket, app)))
+        .on_upgrade(move |socket| tracker.track_future(run_link(socket, app, peer)))
+}
+
+/// A refused frame: counted, recorded, and the error to send.
+fn rejected(
+    app: &AppState,
+    peer: Option<SocketAddr>,
+    vessel: Option<&str>,
+    code: &str,
+    message: impl Into<String>,
+) -> CoordinatorMessage {
+    let message = message.into();
+    if app.recorder.is_on() {
+        let mut event = EventRecord::new(app.clock.now(), EventKind::RejectedFrame)
+            .code(code)
+            .peer(peer)
+            .detail(message.clone());
+        event.vessel = vessel.map(str::to_string);
+        app.recorder.event(event);
+    }
+    error(code, message)
 }
 
 fn finite(p: &PoseDocument) -> bool {
@@ -122,7 +145,7 @@ fn parse(text: &str) -> Result<VesselMessage, serde_json::Error> {
     }
 }
 
-async fn run_link(mut socket: WebSocket, app: AppState) {
+async fn run_link(mut socket: WebSocket, app: AppState, peer: Option<SocketAddr>) {
     // The first frame must be a hello.
     let hello = tokio::select! {
         _ = app.shutdown.cancelled() => return,
@@ -139,7 +162,10 @@ async fn run_link(mut socket: WebSocket, app: AppState) {
                 if protocol != 1 {
                     return refuse(
                         socket,
-                        error(
+                        rejected(
+                            &app,
+                            peer,
+                            Some(&vessel),
                             "unsupported",
                             format!("protocol {protocol}: only 1 is spoken"),
                         ),
@@ -149,17 +175,37 @@ async fn run_link(mut socket: WebSocket, app: AppState) {
                 if !valid_id(&vessel) {
                     return refuse(
                         socket,
-                        error("invalid", "vessel: must match [A-Za-z0-9_.-]{1,64}"),
+                        rejected(
+                            &app,
+                            peer,
+                            None,
+                            "invalid",
+                            "vessel: must match [A-Za-z0-9_.-]{1,64}",
+                        ),
                     )
                     .await;
                 }
                 (vessel, actuator, astern)
             }
             Ok(VesselMessage::Pose(_)) => {
-                return refuse(socket, error("protocol", "a pose before hello")).await;
+                return refuse(
+                    socket,
+                    rejected(&app, peer, None, "protocol", "a pose before hello"),
+                )
+                .await;
             }
             Err(e) => {
-                return refuse(socket, error("malformed", format!("expected hello: {e}"))).await;
+                return refuse(
+                    socket,
+                    rejected(
+                        &app,
+                        peer,
+                        None,
+                        "malformed",
+                        format!("expected hello: {e}"),
+                    ),
+                )
+                .await;
             }
         },
         _ => return,
@@ -184,7 +230,13 @@ async fn run_link(mut socket: WebSocket, app: AppState) {
         .is_ok();
     let tick_hz = match (registered, reply_rx.await) {
         (true, Ok(Ok(hz))) => hz,
-        (_, Ok(Err(e))) => return refuse(socket, error(e.code(), e.to_string())).await,
+        (_, Ok(Err(e))) => {
+            return refuse(
+                socket,
+                rejected(&app, peer, Some(&id), e.code(), e.to_string()),
+            )
+            .await;
+        }
         _ => {
             return refuse(
                 socket,
@@ -204,6 +256,12 @@ async fn run_link(mut socket: WebSocket, app: AppState) {
         return;
     }
 
+    let vessel: std::sync::Arc<str> = id.as_str().into();
+    app.recorder.event(
+        EventRecord::new(app.clock.now(), EventKind::LinkUp)
+            .vessel(id.clone())
+            .peer(peer),
+    );
     let mut garbage = 0;
     // Handles looked up once: a lookup hashes the name and labels.
     let poses_in = metrics::counter!(super::metrics::MESSAGES_IN, "kind" => "pose");
@@ -247,18 +305,22 @@ async fn run_link(mut socket: WebSocket, app: AppState) {
                 Some(Ok(Message::Text(t))) => match parse(&t) {
                     Ok(VesselMessage::Pose(pose)) if finite(&pose) => {
                         poses_in.increment(1);
+                        app.recorder.pose(&vessel, app.clock.now(), &pose);
                         pose_tx.send_replace(Some(pose));
                     }
                     Ok(VesselMessage::Pose(_)) => {
-                        let _ = socket.send(text(&error("invalid", "pose: every number must be finite"))).await;
+                        let refusal = rejected(&app, peer, Some(&id), "invalid", "pose: every number must be finite");
+                        let _ = socket.send(text(&refusal)).await;
                     }
                     Ok(VesselMessage::Hello { .. }) => {
-                        let _ = socket.send(text(&error("protocol", "hello twice on one link"))).await;
+                        let refusal = rejected(&app, peer, Some(&id), "protocol", "hello twice on one link");
+                        let _ = socket.send(text(&refusal)).await;
                     }
                     Err(e) => {
                         garbage += 1;
                         let fatal = garbage >= MAX_GARBAGE;
-                        let _ = socket.send(text(&error("malformed", format!("{e}")))).await;
+                        let refusal = rejected(&app, peer, Some(&id), "malformed", format!("{e}"));
+                        let _ = socket.send(text(&refusal)).await;
                         if fatal {
                             break;
                         }
@@ -270,6 +332,11 @@ async fn run_link(mut socket: WebSocket, app: AppState) {
         }
     }
     let _ = socket.close().await;
+    app.recorder.event(
+        EventRecord::new(app.clock.now(), EventKind::LinkDown)
+            .vessel(id.clone())
+            .peer(peer),
+    );
     let _ = app.requests.send(Request::Gone { id, link }).await;
 }
 

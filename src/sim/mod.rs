@@ -18,6 +18,7 @@
 pub mod figures;
 pub mod monitor;
 pub mod output;
+pub mod record;
 pub mod starts;
 pub mod study;
 
@@ -199,6 +200,15 @@ pub fn staging_zone(spec: &str) -> Option<(Point, Point)> {
 /// Loads a built-in scenario (`paper`, `harbour-8`, `harbour-30`) or a
 /// scenario file; returns it with the vessels' initial headings.
 pub fn load_scenario(spec: &str) -> Result<(Scenario, Vec<f64>), SimError> {
+    let doc = load_scenario_document(spec)?;
+    let scenario = Scenario::from_document(&doc)?;
+    let headings = doc.vessels.iter().map(|v| v.psi.unwrap_or(0.0)).collect();
+    Ok((scenario, headings))
+}
+
+/// The document of a built-in scenario or a scenario file, placed in its
+/// own plane (what [`load_scenario`] builds the scenario from).
+pub fn load_scenario_document(spec: &str) -> Result<crate::scenario::LocalScenario, SimError> {
     let (text, keep) = match spec {
         "paper" => (PAPER_SCENARIO.to_string(), usize::MAX),
         "harbour-8" => (HARBOUR_SCENARIO.to_string(), 8),
@@ -211,9 +221,7 @@ pub fn load_scenario(spec: &str) -> Result<(Scenario, Vec<f64>), SimError> {
     };
     let mut doc = crate::scenario::parse_document(&text)?;
     doc.vessels.truncate(keep);
-    let scenario = Scenario::from_document(&doc)?;
-    let headings = doc.vessels.iter().map(|v| v.psi.unwrap_or(0.0)).collect();
-    Ok((scenario, headings))
+    Ok(doc)
 }
 
 impl Config {
@@ -287,12 +295,16 @@ pub fn run_to_dir(
     config: &Config,
     out: &std::path::Path,
     figures: bool,
+    record: Option<(&std::path::Path, &crate::scenario::LocalScenario)>,
     progress: impl FnMut(f64),
 ) -> Result<(output::Summary, output::SafetySummary), SimError> {
     let io = |e: std::io::Error| SimError::Io(format!("{}: {e}", out.display()));
     std::fs::create_dir_all(out).map_err(io)?;
     let started = std::time::Instant::now();
     let result = run(config, progress)?;
+    if let Some((path, doc)) = record {
+        record::record(path, config, doc, &result)?;
+    }
     let wall = started.elapsed().as_secs_f64();
     let summary = output::Summary::new(config, &result, wall);
     let safety = output::SafetySummary::new(config, &result);

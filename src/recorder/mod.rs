@@ -1,0 +1,224 @@
+//! The mission recorder: every run as MCAP (issue 16), written on a thread
+//! of its own.
+//!
+//! The coordinator (and `seacover sim`) hand a [`Recorder`] what happened —
+//! poses as received, each tick's snapshot, mission changes, events — and
+//! the [`writer`] thread turns them into the channels of [`messages`]:
+//! JSON messages with schemas generated from the protocol types, in zstd
+//! chunks of at most one second of mission time, so a `kill -9` loses at
+//! most the last second and leaves a file that MCAP readers recover.
+//! [`reader`] reads recordings back (replay, `seacover record`), through
+//! the chunk index when the file has one and by recovering the chunks when
+//! it was cut short.
+//!
+//! Invariants:
+//! - the coordinator never waits on the disk: [`Recorder`] hands entries
+//!   over a bounded channel with `try_send`; what does not fit is dropped
+//!   and counted (`seacover_recording_dropped_total`), and everything else
+//!   — serialization, compression, writing — happens on the writer thread;
+//! - a recording that cannot be written (an unwritable directory, a full
+//!   disk) stops with an error in the log and `seacover_recording_errors_total`,
+//!   and the coordinator runs on; `seacover_recording_active` says which;
+//! - `seacover sim` records with a blocking hand-over instead, so that the
+//!   same seed gives the same messages.
+
+pub mod inspect;
+pub mod messages;
+pub mod reader;
+pub mod writer;
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::mpsc::{SyncSender, TrySendError};
+use std::time::{Duration, Instant};
+
+use crate::protocol::{MissionDocument, PoseDocument, Snapshot};
+use messages::{EventRecord, SimVesselRecord};
+
+/// Entries dropped because the writer was behind or stopped.
+pub const DROPPED: &str = "seacover_recording_dropped_total";
+/// Recording errors (each stops the recording).
+pub const ERRORS: &str = "seacover_recording_errors_total";
+/// 1 while a recording is being written, 0 otherwise.
+pub const ACTIVE: &str = "seacover_recording_active";
+/// Bytes written to recordings.
+pub const BYTES: &str = "seacover_recording_bytes_total";
+
+/// Entries the hand-over holds: about two seconds of a 1000-vessel fleet's
+/// poses (20 Hz) and ticks.
+const CAPACITY: usize = 65_536;
+
+/// Where and how a recording is written.
+#[derive(Debug, Clone)]
+pub struct RecorderConfig {
+    pub target: Target,
+    /// Publish times from the wall clock (the coordinator) or equal to the
+    /// log times (the simulator, so that a seed gives the same file).
+    pub wall_clock: bool,
+}
+
+/// Where recordings go.
+#[derive(Debug, Clone)]
+pub enum Target {
+    /// `DIR/<UTC start>.mcap`, a new file after `max_bytes` or `max_duration`
+    /// (wall clock).
+    Directory {
+        dir: PathBuf,
+        max_bytes: u64,
+        max_duration: Duration,
+    },
+    /// One file, never rotated (`seacover sim --record FILE`).
+    File(PathBuf),
+}
+
+/// What the recorder is handed.
+#[derive(Debug)]
+pub enum Entry {
+    /// A pose as the coordinator received it, at mission time `time`.
+    Pose {
+        vessel: Arc<str>,
+        time: f64,
+        pose: PoseDocument,
+    },
+    /// A published snapshot. Each new tick's coverage, commands and, for
+    /// geo-referenced missions, map channels are recorded from it; a
+    /// snapshot of a tick already recorded (one published by a mission
+    /// change) adds nothing.
+    Tick(Arc<Snapshot>),
+    /// The whole mission, at start and after each accepted change.
+    Mission {
+        time: f64,
+        mission: Box<MissionDocument>,
+    },
+    Event(EventRecord),
+    /// `seacover sim`: a vessel's truth, disturbance and estimate.
+    SimVessel(SimVesselRecord),
+    /// Finish the file and stop.
+    Finish,
+}
+
+/// The coordinator's mission clock: mission time is wall time since the
+/// clock's origin, times the time warp; tick N is due when it reads
+/// N / tick_hz.
+#[derive(Debug, Clone, Copy)]
+pub struct MissionClock {
+    pub origin: Instant,
+    pub warp: f64,
+}
+
+impl MissionClock {
+    /// A clock whose first tick (tick 1, due one period after the origin)
+    /// is due now.
+    pub fn first_tick_now(warp: f64, tick_hz: f64) -> MissionClock {
+        let period = Duration::from_secs_f64(1.0 / (tick_hz * warp));
+        let now = Instant::now();
+        MissionClock {
+            origin: now.checked_sub(period).unwrap_or(now),
+            warp,
+        }
+    }
+
+    /// Mission time now [s].
+    pub fn now(&self) -> f64 {
+        self.origin.elapsed().as_secs_f64() * self.warp
+    }
+}
+
+/// The hand-over to the writer thread; cheap to clone. A recorder that is
+/// off takes everything and does nothing.
+#[derive(Debug, Clone)]
+pub struct Recorder {
+    tx: Option<SyncSender<Entry>>,
+    blocking: bool,
+}
+
+/// The writer thread, to wait for once the recorder is finished.
+pub struct RecorderThread(Option<std::thread::JoinHandle<()>>);
+
+impl RecorderThread {
+    /// Waits until the writer has finished its file.
+    pub fn join(mut self) {
+        if let Some(t) = self.0.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+impl Recorder {
+    /// A recorder that records nothing (`--record off`).
+    pub fn off() -> Recorder {
+        Recorder {
+            tx: None,
+            blocking: false,
+        }
+    }
+
+    /// Starts the writer thread. Entries are dropped rather than waited
+    /// for, unless `blocking` (the simulator).
+    pub fn start(config: RecorderConfig, blocking: bool) -> (Recorder, RecorderThread) {
+        let (tx, rx) = std::sync::mpsc::sync_channel(CAPACITY);
+        let thread = std::thread::Builder::new()
+            .name("seacover-recorder".into())
+            .spawn(move || writer::run(config, rx))
+            .expect("a thread can be spawned");
+        (
+            Recorder {
+                tx: Some(tx),
+                blocking,
+            },
+            RecorderThread(Some(thread)),
+        )
+    }
+
+    pub fn is_on(&self) -> bool {
+        self.tx.is_some()
+    }
+
+    pub fn record(&self, entry: Entry) {
+        let Some(tx) = &self.tx else { return };
+        if self.blocking {
+            let _ = tx.send(entry);
+            return;
+        }
+        match tx.try_send(entry) {
+            Ok(()) => {}
+            Err(TrySendError::Full(_) | TrySendError::Disconnected(_)) => {
+                metrics::counter!(DROPPED).increment(1);
+            }
+        }
+    }
+
+    pub fn pose(&self, vessel: &Arc<str>, time: f64, pose: &PoseDocument) {
+        if self.tx.is_some() {
+            self.record(Entry::Pose {
+                vessel: vessel.clone(),
+                time,
+                pose: pose.clone(),
+            });
+        }
+    }
+
+    pub fn event(&self, event: EventRecord) {
+        if self.tx.is_some() {
+            self.record(Entry::Event(event));
+        }
+    }
+
+    pub fn mission(&self, time: f64, mission: MissionDocument) {
+        if self.tx.is_some() {
+            self.record(Entry::Mission {
+                time,
+                mission: Box::new(mission),
+            });
+        }
+    }
+
+    /// Asks the writer to finish its file (it has everything handed over
+    /// before); the caller then joins the [`RecorderThread`].
+    pub fn finish(&self) {
+        if let Some(tx) = &self.tx {
+            // Blocking: the end of the file must not be dropped.
+            let _ = tx.send(Entry::Finish);
+        }
+    }
+}

@@ -1,0 +1,520 @@
+//! The writer thread: entries in, MCAP files out.
+//!
+//! - A chunk holds at most one second of mission time and is closed at
+//!   least once a second of wall time, then flushed to the operating
+//!   system: a `kill -9` of the process loses at most that second, and the
+//!   chunks before it are whole, so MCAP readers recover the file.
+//! - Each file starts with the newest mission, so every file of a rotated
+//!   run stands on its own.
+//! - The first error (an unwritable directory, a full disk) ends the
+//!   recording for good: logged, counted, and everything handed over
+//!   afterwards is dropped. The thread never panics on I/O.
+
+use std::collections::HashMap;
+use std::fs::File;
+use std::io::BufWriter;
+use std::path::{Path, PathBuf};
+use std::sync::mpsc::{Receiver, RecvTimeoutError};
+use std::time::{Duration, Instant};
+
+use serde::Serialize;
+
+use super::messages::{
+    self, CommandRecord, EventRecord, FoxgloveTime, GeoJson, LocationFix, MissionRecord,
+    PoseRecord, SimVesselRecord, VesselState, ns,
+};
+use super::{ACTIVE, BYTES, ERRORS, Entry, RecorderConfig, Target};
+use crate::protocol::Snapshot;
+
+/// Longest span of mission time in one chunk [ns].
+const CHUNK_SPAN: u64 = 1_000_000_000;
+/// Longest wall time a chunk stays open.
+const CHUNK_WALL: Duration = Duration::from_secs(1);
+
+/// Why a recording stopped.
+#[derive(Debug, thiserror::Error)]
+pub enum RecordError {
+    #[error("recording directory {path}: {source}")]
+    Directory {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("recording file {path}: {source}")]
+    File {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("writing {path}: {source}")]
+    Mcap {
+        path: PathBuf,
+        source: mcap::McapError,
+    },
+}
+
+pub(super) fn run(config: RecorderConfig, rx: Receiver<Entry>) {
+    let mut w = Writer::new(config);
+    // Open the first file at once, so that an unwritable directory is
+    // reported when the coordinator starts, not at its first pose.
+    w.guard(|w| w.open());
+    loop {
+        let wait = w.until_flush();
+        match rx.recv_timeout(wait) {
+            Ok(Entry::Finish) | Err(RecvTimeoutError::Disconnected) => break,
+            Ok(entry) => {
+                if w.file.is_some() {
+                    w.guard(|w| w.write(entry));
+                }
+            }
+            Err(RecvTimeoutError::Timeout) => {}
+        }
+        w.guard(|w| w.flush_if_due());
+    }
+    w.guard(|w| w.close());
+    metrics::gauge!(ACTIVE).set(0.0);
+}
+
+/// The command channel's message, borrowing the command.
+#[derive(Serialize)]
+struct CommandOut<'a> {
+    vessel: &'a str,
+    tick: u64,
+    command: &'a crate::protocol::CommandDocument,
+}
+
+struct OpenFile {
+    mcap: mcap::Writer<BufWriter<File>>,
+    path: PathBuf,
+    /// Channel ids by topic, in this file.
+    channels: HashMap<String, u16>,
+    opened: Instant,
+    /// Log time of the open chunk's first message.
+    chunk_first: Option<u64>,
+    flushed: Instant,
+    /// Bytes on disk at the last flush.
+    size: u64,
+}
+
+struct Writer {
+    config: RecorderConfig,
+    file: Option<OpenFile>,
+    /// Set by the first error: nothing more is written.
+    failed: bool,
+    /// The newest mission, to start each new file with.
+    mission: Option<(u64, MissionRecord)>,
+    last_tick: Option<u64>,
+    /// The last whole second of mission time the map channels were
+    /// written in.
+    map_second: Option<u64>,
+    sequence: u32,
+    bytes_total: u64,
+}
+
+impl Writer {
+    fn new(config: RecorderConfig) -> Writer {
+        Writer {
+            config,
+            file: None,
+            failed: false,
+            mission: None,
+            last_tick: None,
+            map_second: None,
+            sequence: 0,
+            bytes_total: 0,
+        }
+    }
+
+    /// Runs `f` unless the recording has failed; its error fails it.
+    fn guard(&mut self, f: impl FnOnce(&mut Writer) -> Result<(), RecordError>) {
+        if self.failed {
+            return;
+        }
+        if let Err(e) = f(self) {
+            tracing::error!(error = %e, "recording stopped; the coordinator goes on without it");
+            metrics::counter!(ERRORS).increment(1);
+            metrics::gauge!(ACTIVE).set(0.0);
+            self.failed = true;
+            // What was written before stays readable (whole chunks); the
+            // summary is not attempted on a writer that has failed.
+            if let Some(f) = self.file.take() {
+                std::mem::forget(f.mcap);
+            }
+        }
+    }
+
+    fn until_flush(&self) -> Duration {
+        match &self.file {
+            Some(f) if f.chunk_first.is_some() => CHUNK_WALL.saturating_sub(f.flushed.elapsed()),
+            _ => CHUNK_WALL,
+        }
+    }
+
+    fn path_for_new_file(&self) -> Result<PathBuf, RecordError> {
+        match &self.config.target {
+            Target::File(path) => Ok(path.clone()),
+            Target::Directory { dir, .. } => {
+                std::fs::create_dir_all(dir).map_err(|source| RecordError::Directory {
+                    path: dir.clone(),
+                    source,
+                })?;
+                Ok(unused_name(dir, &utc_stamp()))
+            }
+        }
+    }
+
+    fn open(&mut self) -> Result<(), RecordError> {
+        let path = self.path_for_new_file()?;
+        let file = File::create(&path).map_err(|source| RecordError::File {
+            path: path.clone(),
+            source,
+        })?;
+        let options = mcap::WriteOptions::new()
+            .compression(Some(mcap::Compression::Zstd))
+            .profile("")
+            .library(concat!("seacover ", env!("CARGO_PKG_VERSION")))
+            // Chunks are closed by time (below); this only bounds a burst.
+            .chunk_size(Some(16 * 1024 * 1024))
+            // One thread: the recorder's cost is this thread's, measured.
+            .compression_threads(0);
+        let mcap = options
+            .create(BufWriter::with_capacity(1 << 20, file))
+            .map_err(|source| RecordError::Mcap {
+                path: path.clone(),
+                source,
+            })?;
+        tracing::info!(path = %path.display(), "recording");
+        metrics::gauge!(ACTIVE).set(1.0);
+        self.file = Some(OpenFile {
+            mcap,
+            path,
+            channels: HashMap::new(),
+            opened: Instant::now(),
+            chunk_first: None,
+            flushed: Instant::now(),
+            size: 0,
+        });
+        if let Some((log, mission)) = self.mission.clone() {
+            self.put(
+                messages::MISSION,
+                messages::spec::<MissionRecord>,
+                log,
+                &mission,
+            )?;
+        }
+        Ok(())
+    }
+
+    fn close(&mut self) -> Result<(), RecordError> {
+        if let Some(mut f) = self.file.take() {
+            f.mcap.finish().map_err(|source| RecordError::Mcap {
+                path: f.path.clone(),
+                source,
+            })?;
+            let mut inner = f.mcap.into_inner();
+            use std::io::Write;
+            inner.flush().map_err(|source| RecordError::File {
+                path: f.path.clone(),
+                source,
+            })?;
+            tracing::info!(path = %f.path.display(), "recording closed");
+        }
+        Ok(())
+    }
+
+    /// Closes the open chunk when it is a second old (wall); rotates the
+    /// file when it is too big or too old.
+    fn flush_if_due(&mut self) -> Result<(), RecordError> {
+        let due = self
+            .file
+            .as_ref()
+            .is_some_and(|f| f.chunk_first.is_some() && f.flushed.elapsed() >= CHUNK_WALL);
+        if due {
+            self.flush()?;
+        }
+        if let (
+            Some(f),
+            Target::Directory {
+                max_bytes,
+                max_duration,
+                ..
+            },
+        ) = (&self.file, &self.config.target)
+            // Only a file with something flushed in it is rotated, so that
+            // `--record-max-mb 0` means a file a second, not a file a loop.
+            && f.size > 0
+            && (f.size >= *max_bytes || f.opened.elapsed() >= *max_duration)
+        {
+            self.close()?;
+            self.open()?;
+        }
+        Ok(())
+    }
+
+    fn flush(&mut self) -> Result<(), RecordError> {
+        let Some(f) = self.file.as_mut() else {
+            return Ok(());
+        };
+        f.mcap.flush().map_err(|source| RecordError::Mcap {
+            path: f.path.clone(),
+            source,
+        })?;
+        f.chunk_first = None;
+        f.flushed = Instant::now();
+        let size = std::fs::metadata(&f.path).map_or(f.size, |m| m.len());
+        self.bytes_total += size.saturating_sub(f.size);
+        metrics::counter!(BYTES).increment(size.saturating_sub(f.size));
+        f.size = size;
+        Ok(())
+    }
+
+    /// Writes one message on `topic` (its channel added to this file on
+    /// first use).
+    fn put<T: Serialize>(
+        &mut self,
+        topic: &str,
+        spec: fn() -> messages::ChannelSpec,
+        log_time: u64,
+        message: &T,
+    ) -> Result<(), RecordError> {
+        // A chunk spans at most a second of mission time.
+        if self
+            .file
+            .as_ref()
+            .and_then(|f| f.chunk_first)
+            .is_some_and(|first| log_time.abs_diff(first) >= CHUNK_SPAN)
+        {
+            self.flush()?;
+        }
+        let publish_time = if self.config.wall_clock {
+            std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map_or(0, |d| d.as_nanos() as u64)
+        } else {
+            log_time
+        };
+        let sequence = self.sequence;
+        self.sequence = self.sequence.wrapping_add(1);
+        let Some(f) = self.file.as_mut() else {
+            return Ok(());
+        };
+        let mcap_error = |path: &Path| {
+            let path = path.to_path_buf();
+            move |source| RecordError::Mcap { path, source }
+        };
+        let channel = match f.channels.get(topic) {
+            Some(id) => *id,
+            None => {
+                let spec = spec();
+                let schema = f
+                    .mcap
+                    .add_schema(&spec.schema_name, "jsonschema", &spec.schema)
+                    .map_err(mcap_error(&f.path))?;
+                let id = f
+                    .mcap
+                    .add_channel(schema, topic, "json", &Default::default())
+                    .map_err(mcap_error(&f.path))?;
+                f.channels.insert(topic.to_string(), id);
+                id
+            }
+        };
+        let data = serde_json::to_vec(message).expect("records serialize");
+        f.mcap
+            .write_to_known_channel(
+                &mcap::records::MessageHeader {
+                    channel_id: channel,
+                    sequence,
+                    log_time,
+                    publish_time,
+                },
+                &data,
+            )
+            .map_err(mcap_error(&f.path))?;
+        f.chunk_first.get_or_insert(log_time);
+        Ok(())
+    }
+
+    fn write(&mut self, entry: Entry) -> Result<(), RecordError> {
+        match entry {
+            Entry::Pose { vessel, time, pose } => {
+                let record = PoseRecord {
+                    vessel: vessel.to_string(),
+                    time,
+                    pose,
+                };
+                self.put(
+                    messages::POSE,
+                    messages::spec::<PoseRecord>,
+                    ns(time),
+                    &record,
+                )
+            }
+            Entry::Tick(snapshot) => self.tick(&snapshot),
+            Entry::Mission { time, mission } => {
+                let record = MissionRecord {
+                    time,
+                    mission: *mission,
+                };
+                let log = ns(time);
+                self.put(
+                    messages::MISSION,
+                    messages::spec::<MissionRecord>,
+                    log,
+                    &record,
+                )?;
+                self.mission = Some((log, record));
+                Ok(())
+            }
+            Entry::Event(event) => {
+                let log = ns(event.time);
+                self.put(messages::EVENTS, messages::spec::<EventRecord>, log, &event)
+            }
+            Entry::SimVessel(record) => {
+                let log = ns(record.time);
+                self.put(
+                    messages::SIM_VESSEL,
+                    messages::spec::<SimVesselRecord>,
+                    log,
+                    &record,
+                )
+            }
+            Entry::Finish => Ok(()),
+        }
+    }
+
+    fn tick(&mut self, snapshot: &Snapshot) -> Result<(), RecordError> {
+        let doc = &snapshot.document;
+        if self.last_tick.is_some_and(|t| t >= doc.tick) {
+            return Ok(());
+        }
+        self.last_tick = Some(doc.tick);
+        let log = ns(doc.time);
+        for v in &doc.vessels {
+            if let Some(c) = &v.last_command
+                && v.connected
+                && c.tick == doc.tick
+            {
+                let out = CommandOut {
+                    vessel: &v.id,
+                    tick: doc.tick,
+                    command: c,
+                };
+                self.put(
+                    messages::COMMAND,
+                    messages::spec::<CommandRecord>,
+                    log,
+                    &out,
+                )?;
+            }
+        }
+        let coverage = messages::CoverageRecord {
+            tick: doc.tick,
+            time: doc.time,
+            h: doc.h,
+            cells: snapshot
+                .coverage
+                .cells
+                .iter()
+                .map(messages::CellRecord::of)
+                .collect(),
+            vessels: doc
+                .vessels
+                .iter()
+                .map(|v| VesselState {
+                    id: v.id.clone(),
+                    connected: v.connected,
+                    live: v.live,
+                    controlled: v.controlled,
+                    last_seen: v.last_seen,
+                })
+                .collect(),
+        };
+        self.put(
+            messages::COVERAGE,
+            messages::spec::<messages::CoverageRecord>,
+            log,
+            &coverage,
+        )?;
+        self.map(snapshot, log)
+    }
+
+    /// Foxglove's map channels, once per second of mission time, for a
+    /// geo-referenced mission.
+    fn map(&mut self, snapshot: &Snapshot, log: u64) -> Result<(), RecordError> {
+        let doc = &snapshot.document;
+        let Some(frame) = doc
+            .mission
+            .origin
+            .and_then(|o| crate::server::state::origin_frame(o).ok())
+        else {
+            return Ok(());
+        };
+        let second = log / 1_000_000_000;
+        if self.map_second.is_some_and(|s| s >= second) {
+            return Ok(());
+        }
+        self.map_second = Some(second);
+        for v in &doc.vessels {
+            let Some(p) = &v.pose else { continue };
+            let ll = frame.to_geodetic(p.x, p.y);
+            let fix = LocationFix {
+                timestamp: FoxgloveTime::from_ns(log),
+                frame_id: v.id.clone(),
+                latitude: ll.lat,
+                longitude: ll.lon,
+                altitude: 0.0,
+                position_covariance: [0.0; 9],
+                position_covariance_type: 0,
+            };
+            let topic = format!("{}{}", messages::MAP_FIX_PREFIX, v.id);
+            self.put(&topic, messages::spec::<LocationFix>, log, &fix)?;
+        }
+        let collection =
+            crate::georef::output::coverage(&frame, &snapshot.coverage.cells, &doc.vessels);
+        let geojson = GeoJson {
+            geojson: collection.to_string(),
+        };
+        self.put(
+            messages::MAP_CELLS,
+            messages::spec::<GeoJson>,
+            log,
+            &geojson,
+        )
+    }
+}
+
+/// `2026-11-23T10-00-00Z`: the UTC time now, in a file name every file
+/// system takes.
+fn utc_stamp() -> String {
+    let format =
+        time::macros::format_description!("[year]-[month]-[day]T[hour]-[minute]-[second]Z");
+    time::OffsetDateTime::now_utc()
+        .format(&format)
+        .unwrap_or_else(|_| "recording".into())
+}
+
+/// `dir/stamp.mcap`, or `dir/stamp-N.mcap` when that exists (two files
+/// started within one second: a rotation right after a start).
+fn unused_name(dir: &Path, stamp: &str) -> PathBuf {
+    let first = dir.join(format!("{stamp}.mcap"));
+    if !first.exists() {
+        return first;
+    }
+    (1..)
+        .map(|n| dir.join(format!("{stamp}-{n}.mcap")))
+        .find(|p| !p.exists())
+        .expect("some name is free")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_do_not_collide() {
+        let dir = tempfile::tempdir().unwrap();
+        let a = unused_name(dir.path(), "2026-11-23T10-00-00Z");
+        std::fs::write(&a, b"").unwrap();
+        let b = unused_name(dir.path(), "2026-11-23T10-00-00Z");
+        assert_eq!(b.file_name().unwrap(), "2026-11-23T10-00-00Z-1.mcap");
+        assert!(utc_stamp().ends_with('Z'));
+    }
+}

@@ -1,0 +1,160 @@
+//! `seacover sim --record FILE.mcap`: a finished run as the coordinator
+//! would have recorded it — the mission, each tick's poses, commands and
+//! coverage — plus what only a simulator knows: each vessel's true state,
+//! its disturbance and the observer's estimate
+//! ([`crate::recorder::messages::SIM_VESSEL`]).
+//!
+//! Written after the run from its ticks, re-evaluating each tick's
+//! partition (the run keeps H and centroids, not every cell): evaluation
+//! is deterministic, so the cells are the run's. Publish times are the log
+//! times and the writer blocks instead of dropping, so the same seed gives
+//! the same file.
+
+use std::path::Path;
+use std::sync::Arc;
+
+use super::{Config, Run, SimError, fleet_at};
+use crate::coverage::{Options, evaluate};
+use crate::geometry::Point;
+use crate::protocol::{
+    ActuatorDocument, CommandDocument, CoverageDocument, MissionDocument, PoseDocument,
+    RiskDocument, Snapshot, SnapshotDocument, VesselStatusDocument,
+};
+use crate::recorder::messages::SimVesselRecord;
+use crate::recorder::{Entry, Recorder, RecorderConfig, Target};
+use crate::scenario::{LocalScenario, evaluation_document};
+use crate::server::state::{guidance_document, safety_document};
+
+/// Records `run` of `config` (from the scenario document `doc`) to `path`.
+pub fn record(
+    path: &Path,
+    config: &Config,
+    doc: &LocalScenario,
+    run: &Run,
+) -> Result<(), SimError> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| SimError::Io(format!("{}: {e}", dir.display())))?;
+    }
+    // Opened here first, so that an unwritable path is this command's
+    // error rather than a line in the log.
+    std::fs::File::create(path).map_err(|e| SimError::Io(format!("{}: {e}", path.display())))?;
+    let (recorder, thread) = Recorder::start(
+        RecorderConfig {
+            target: Target::File(path.to_path_buf()),
+            wall_clock: false,
+        },
+        true,
+    );
+    let ids = &config.scenario.ids;
+    let first = config.scenario.fleet.vessels()[0];
+    let mut risk = doc.risk.clone().unwrap_or(RiskDocument {
+        base: 0.0,
+        objects: Vec::new(),
+    });
+    for (i, o) in risk.objects.iter_mut().enumerate() {
+        o.id.get_or_insert_with(|| format!("object-{}", i + 1));
+    }
+    let mission = MissionDocument {
+        origin: None,
+        region: doc
+            .region
+            .clone()
+            .expect("a simulated scenario has a region"),
+        risk,
+        actuator: ActuatorDocument {
+            k: first.k,
+            beta: first.beta,
+        },
+        guidance: guidance_document(&config.guidance),
+        tick_hz: config.tick_hz,
+        safety: safety_document(&config.safety),
+    };
+    recorder.mission(0.0, mission.clone());
+    let options = Options::default();
+    for (k, tick) in run.ticks.iter().enumerate() {
+        let positions = tick.vessels.iter().map(|v| Point {
+            x: v.state.x,
+            y: v.state.y,
+        });
+        let Some(fleet) = fleet_at(config, positions) else {
+            continue;
+        };
+        let evaluation = evaluate(
+            &config.scenario.region,
+            &config.scenario.risk,
+            &fleet,
+            &options,
+        );
+        let cells = evaluation_document(&config.scenario.region, ids, &evaluation).cells;
+        let mut vessels = Vec::with_capacity(ids.len());
+        for ((id, v), cell) in ids.iter().zip(&tick.vessels).zip(&cells) {
+            let s = v.state;
+            let pose = PoseDocument {
+                t: tick.t,
+                x: s.x,
+                y: s.y,
+                psi: s.psi,
+                u: s.vel.x,
+                v: s.vel.y,
+                r: s.vel.z,
+                controlled: None,
+                telemetry: None,
+            };
+            recorder.record(Entry::Pose {
+                vessel: Arc::from(id.as_str()),
+                time: tick.t,
+                pose: pose.clone(),
+            });
+            recorder.record(Entry::SimVessel(SimVesselRecord {
+                vessel: id.clone(),
+                time: tick.t,
+                truth: [s.x, s.y, s.psi, s.vel.x, s.vel.y, s.vel.z],
+                disturbance: [v.tau_d.x, v.tau_d.y, v.tau_d.z],
+                estimate: [v.estimate.x, v.estimate.y, v.estimate.z],
+            }));
+            let c = v.command;
+            vessels.push(VesselStatusDocument {
+                id: id.clone(),
+                connected: true,
+                live: true,
+                controlled: true,
+                pose: Some(pose),
+                actuator: mission.actuator,
+                polygon: cell.polygon.clone(),
+                mass: cell.mass,
+                centroid: Some(cell.centroid),
+                last_command: Some(CommandDocument {
+                    tick: k as u64,
+                    u_d: c.u_d,
+                    r_d: c.r_d,
+                    u_d_dot: c.u_d_dot,
+                    r_d_dot: c.r_d_dot,
+                    centroid: [v.centroid.x, v.centroid.y],
+                    e: c.e,
+                    psi_e: c.psi_e,
+                }),
+                last_seen: Some(tick.t),
+            });
+        }
+        let snapshot = Snapshot {
+            document: SnapshotDocument {
+                tick: k as u64,
+                time: tick.t,
+                h: tick.h,
+                mission: mission.clone(),
+                vessels,
+            },
+            coverage: CoverageDocument {
+                tick: k as u64,
+                time: tick.t,
+                h: tick.h,
+                cells,
+            },
+        };
+        recorder.record(Entry::Tick(Arc::new(snapshot)));
+    }
+    recorder.finish();
+    thread.join();
+    Ok(())
+}

@@ -1,0 +1,370 @@
+//! Recording (issue 16): real `seacover serve` and `seacover agent`
+//! processes on port 0, the files they leave read back by seacover's own
+//! reader and by an independent one (Foxglove's Python `mcap` package,
+//! `tests/python/check_recording.py`, from the venv scripts/test makes:
+//! `SEACOVER_PYTHON`), with every message validated against its channel's
+//! schema.
+
+mod common;
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::Duration;
+
+use common::server::{eventually, start};
+use seacover::recorder::messages;
+use seacover::recorder::reader::Recording;
+use serde_json::{Value, json};
+
+const BIN: &str = env!("CARGO_BIN_EXE_seacover");
+
+/// The interpreter with `mcap` and `jsonschema`; `None` (the test is
+/// skipped with a message) without one, except under CI=true.
+fn python() -> Option<PathBuf> {
+    let candidates = [
+        std::env::var_os("SEACOVER_PYTHON").map(PathBuf::from),
+        Some(PathBuf::from(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/target/test-venv/bin/python"
+        ))),
+    ];
+    for p in candidates.into_iter().flatten() {
+        let ok = Command::new(&p)
+            .args(["-c", "import mcap, jsonschema"])
+            .status()
+            .is_ok_and(|s| s.success());
+        if ok {
+            return Some(p);
+        }
+    }
+    assert!(
+        std::env::var("CI").as_deref() != Ok("true"),
+        "CI=true: Python with mcap and jsonschema is required (scripts/test makes target/test-venv)"
+    );
+    eprintln!(
+        "skipped: no Python with Foxglove's mcap package (run scripts/test, or set SEACOVER_PYTHON)"
+    );
+    None
+}
+
+/// The independent reader's report of `file`.
+fn check(python: &Path, file: &Path) -> Value {
+    let out = Command::new(python)
+        .arg(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/tests/python/check_recording.py"
+        ))
+        .arg(file)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+struct Server {
+    child: Child,
+    addr: String,
+}
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+fn serve(data: &Path, extra: &[&str]) -> Server {
+    let mut command = Command::new(BIN);
+    command
+        .args([
+            "serve",
+            "--bind",
+            "127.0.0.1:0",
+            "--time-warp",
+            "4",
+            "--data-dir",
+        ])
+        .arg(data)
+        .args(extra)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null());
+    let (child, addr) = start(command);
+    Server { child, addr }
+}
+
+fn agents(addr: &str, n: usize) -> Child {
+    Command::new(BIN)
+        .args(["agent", "--server", &format!("http://{addr}")])
+        .args(["--vessels", &n.to_string(), "--time-warp", "4"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap()
+}
+
+fn signal(child: &Child, sig: &str) {
+    let ok = Command::new("kill")
+        .args([sig, &child.id().to_string()])
+        .status()
+        .unwrap()
+        .success();
+    assert!(ok);
+}
+
+fn recordings(data: &Path) -> Vec<PathBuf> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(data.join("recordings"))
+        .map(|d| d.map(|e| e.unwrap().path()).collect())
+        .unwrap_or_default();
+    files.sort();
+    files
+}
+
+/// A metric's value from `/metrics` (summed over its labels).
+async fn metric(http: &reqwest::Client, addr: &str, name: &str, label: &str) -> f64 {
+    let text = http
+        .get(format!("http://{addr}/metrics"))
+        .send()
+        .await
+        .unwrap()
+        .text()
+        .await
+        .unwrap();
+    text.lines()
+        .filter(|l| l.starts_with(name) && l.contains(label))
+        .filter_map(|l| l.rsplit(' ').next()?.parse::<f64>().ok())
+        .sum()
+}
+
+fn counts(recording: &Recording) -> BTreeMap<String, u64> {
+    recording
+        .channels()
+        .into_iter()
+        .map(|(c, n)| (c.topic.to_string(), n))
+        .collect()
+}
+
+/// A whole run: every pose received and every command sent is in the file,
+/// with the mission, its change and the events; both readers agree and
+/// every message fits its schema.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_run_is_recorded_whole() {
+    let Some(python) = python() else { return };
+    let data = tempfile::tempdir().unwrap();
+    let server = serve(data.path(), &[]);
+    let http = reqwest::Client::new();
+    let mut fleet = agents(&server.addr, 3);
+    let url = |p: &str| format!("http://{}{p}", server.addr);
+    eventually(20, "three vessels commanded", || async {
+        let v: Vec<Value> = http
+            .get(url("/api/v1/vessels"))
+            .send()
+            .await
+            .unwrap()
+            .json()
+            .await
+            .unwrap();
+        v.len() == 3 && v.iter().all(|v| !v["last_command"].is_null())
+    })
+    .await;
+    let posted = http
+        .post(url("/api/v1/risk-objects"))
+        .json(&json!({"x": 30, "y": 40, "alpha": 20, "sigma": 10}))
+        .send()
+        .await
+        .unwrap();
+    assert!(posted.status().is_success());
+    let refused = http
+        .put(url("/api/v1/mission/risk/base"))
+        .body("not json")
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(refused.status(), 400);
+    tokio::time::sleep(Duration::from_secs(2)).await;
+    // The fleet stops first, so that what the coordinator counted is final.
+    signal(&fleet, "-TERM");
+    fleet.wait().unwrap();
+    tokio::time::sleep(Duration::from_millis(500)).await;
+    let poses_in = metric(&http, &server.addr, "seacover_messages_in_total", "pose").await;
+    let commands_out = metric(
+        &http,
+        &server.addr,
+        "seacover_messages_out_total",
+        "command",
+    )
+    .await;
+    let mut server = server;
+    signal(&server.child, "-TERM");
+    server.child.wait().unwrap();
+
+    let files = recordings(data.path());
+    assert_eq!(files.len(), 1, "{files:?}");
+    let name = files[0].file_name().unwrap().to_str().unwrap().to_string();
+    assert!(
+        name.len() == "2026-11-23T10-00-00Z.mcap".len() && name.ends_with("Z.mcap"),
+        "{name}"
+    );
+    let recording = Recording::open(&files[0]).unwrap();
+    assert!(!recording.recovered(), "a finished file has its index");
+    let ours = counts(&recording);
+    assert_eq!(ours[messages::POSE] as f64, poses_in, "{ours:?}");
+    let commands = ours[messages::COMMAND] as f64;
+    assert!(
+        (commands_out..=commands_out + 3.0).contains(&commands),
+        "{commands} commands recorded, {commands_out} written"
+    );
+    assert_eq!(ours[messages::MISSION], 2, "the start and the change");
+    assert!(ours[messages::COVERAGE] > 20);
+    let events: Vec<String> = recording
+        .messages(&|t| t == messages::EVENTS)
+        .map(|m| {
+            let e: Value = serde_json::from_slice(&m.unwrap().data).unwrap();
+            e["kind"].as_str().unwrap().to_string()
+        })
+        .collect();
+    for kind in ["link_up", "link_down", "rejected_request", "shutdown"] {
+        assert!(events.iter().any(|e| e == kind), "{kind} in {events:?}");
+    }
+    // Every chunk spans at most a second of mission time.
+    for (start, end) in recording.chunk_spans() {
+        assert!(end - start <= 1_000_000_000, "{start}..{end}");
+    }
+
+    let theirs = check(&python, &files[0]);
+    assert_eq!(theirs["finished"], true);
+    assert_eq!(theirs["invalid"], 0, "{theirs}");
+    for (topic, n) in &ours {
+        assert_eq!(theirs["counts"][topic], json!(n), "{topic}: {theirs}");
+    }
+    assert_eq!(theirs["schemas"][messages::POSE], "seacover.PoseRecord");
+}
+
+/// `kill -9` mid-run: the file has no summary, yet it reads — in Python's
+/// recovery and in seacover's reader — up to at most the last second.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_killed_coordinator_leaves_a_readable_recording() {
+    let Some(python) = python() else { return };
+    let data = tempfile::tempdir().unwrap();
+    let mut server = serve(data.path(), &[]);
+    let mut fleet = agents(&server.addr, 3);
+    let http = reqwest::Client::new();
+    let addr = server.addr.clone();
+    eventually(20, "vessels commanded", || async {
+        metric(&http, &addr, "seacover_messages_out_total", "command").await > 50.0
+    })
+    .await;
+    tokio::time::sleep(Duration::from_secs(3)).await;
+    let before = http
+        .get(format!("http://{addr}/api/v1/coverage"))
+        .send()
+        .await
+        .unwrap()
+        .json::<Value>()
+        .await
+        .unwrap();
+    server.child.kill().unwrap(); // SIGKILL
+    server.child.wait().unwrap();
+    let _ = fleet.kill();
+    let _ = fleet.wait();
+    let last_tick_time = before["time"].as_f64().unwrap();
+
+    let files = recordings(data.path());
+    assert_eq!(files.len(), 1);
+    let recording = Recording::open(&files[0]).unwrap();
+    assert!(recording.recovered(), "a killed run's file has no index");
+    let (_, end) = recording.span().unwrap();
+    // At most the last second (of mission time, at warp 4: a quarter
+    // second of wall time) is lost, plus the time between the read of
+    // /coverage and the kill.
+    assert!(
+        end as f64 * 1e-9 >= last_tick_time - 1.0,
+        "recovered up to {} s, the coordinator was at {last_tick_time} s",
+        end as f64 * 1e-9
+    );
+    let ours = counts(&recording);
+    assert!(
+        ours[messages::POSE] > 0 && ours[messages::COVERAGE] > 0,
+        "{ours:?}"
+    );
+
+    let theirs = check(&python, &files[0]);
+    assert_eq!(theirs["finished"], false);
+    assert_eq!(theirs["invalid"], 0, "{theirs}");
+    for topic in [messages::POSE, messages::COVERAGE, messages::MISSION] {
+        let n = theirs["counts"][topic].as_u64().unwrap();
+        assert!(
+            n >= ours[topic],
+            "{topic}: python {n}, ours {}",
+            ours[topic]
+        );
+    }
+}
+
+/// `--record off` writes nothing; an unwritable recordings directory stops
+/// the recording (error, metric) and not the coordinator; a small
+/// `--record-max-mb` rotates, each file starting with the mission.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn off_unwritable_and_rotation() {
+    let http = reqwest::Client::new();
+
+    let off = tempfile::tempdir().unwrap();
+    let server = serve(off.path(), &["--record", "off"]);
+    let fleet = agents(&server.addr, 2);
+    tokio::time::sleep(Duration::from_secs(2)).await;
+    assert!(!off.path().join("recordings").exists());
+    drop(KillOnDrop(fleet));
+    drop(server);
+
+    let blocked = tempfile::tempdir().unwrap();
+    std::fs::write(
+        blocked.path().join("recordings"),
+        b"a file, not a directory",
+    )
+    .unwrap();
+    let server = serve(blocked.path(), &[]);
+    let addr = server.addr.clone();
+    eventually(10, "the recording error counted", || async {
+        metric(&http, &addr, "seacover_recording_errors_total", "").await >= 1.0
+    })
+    .await;
+    assert_eq!(
+        metric(&http, &addr, "seacover_recording_active", "").await,
+        0.0
+    );
+    let fleet = agents(&server.addr, 2);
+    eventually(20, "the coordinator still commands", || async {
+        metric(&http, &addr, "seacover_messages_out_total", "command").await > 20.0
+    })
+    .await;
+    drop(KillOnDrop(fleet));
+    drop(server);
+
+    let rotated = tempfile::tempdir().unwrap();
+    let mut server = serve(rotated.path(), &["--record-max-mb", "0"]);
+    let fleet = agents(&server.addr, 2);
+    let dir = rotated.path().to_path_buf();
+    eventually(20, "three files", || async { recordings(&dir).len() >= 3 }).await;
+    drop(KillOnDrop(fleet));
+    signal(&server.child, "-TERM");
+    server.child.wait().unwrap();
+    for file in recordings(&dir) {
+        let r = Recording::open(&file).unwrap();
+        assert!(!r.recovered(), "{file:?} was finished when rotated");
+        let first = r.messages(&|_| true).next().expect("not empty").unwrap();
+        assert_eq!(&*first.topic, messages::MISSION, "{file:?}");
+    }
+}
+
+struct KillOnDrop(Child);
+
+impl Drop for KillOnDrop {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
