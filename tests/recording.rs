@@ -368,3 +368,141 @@ impl Drop for KillOnDrop {
         let _ = self.0.wait();
     }
 }
+
+/// `sim --record`: the same seed gives the same messages; the
+/// file replays, and a seek puts the vessels where the simulation had them
+/// at that moment; the replay refuses writes.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_simulation_records_the_same_file_and_replays() {
+    use std::io::{BufRead, BufReader};
+    let dir = tempfile::tempdir().unwrap();
+    let run = |name: &str| {
+        let file = dir.path().join(format!("{name}.mcap"));
+        let ok = Command::new(BIN)
+            .args([
+                "sim",
+                "--scenario",
+                "paper",
+                "--duration",
+                "6",
+                "--no-figures",
+            ])
+            .arg("--out")
+            .arg(dir.path().join(name))
+            .arg("--record")
+            .arg(&file)
+            .stdout(Stdio::null())
+            .status()
+            .unwrap()
+            .success();
+        assert!(ok);
+        file
+    };
+    let (a, b) = (run("a"), run("b"));
+    // The same messages (the summary's order of channels is the mcap
+    // crate's hash map order, so the files' bytes may differ there).
+    let all = |f: &Path| -> Vec<(String, u64, u64, Vec<u8>)> {
+        Recording::open(f)
+            .unwrap()
+            .messages(&|_| true)
+            .map(|m| {
+                let m = m.unwrap();
+                (m.topic.to_string(), m.log_time, m.publish_time, m.data)
+            })
+            .collect()
+    };
+    assert!(all(&a) == all(&b), "the same seed, the same messages");
+    let recording = Recording::open(&a).unwrap();
+    let n = counts(&recording);
+    assert_eq!(n[messages::COVERAGE], 61, "{n:?}");
+    assert_eq!(n[messages::SIM_VESSEL], 8 * 61);
+    // Where the simulation had each vessel at 3.0 s and 5.0 s.
+    let truth_at = |t: f64| -> BTreeMap<String, [f64; 2]> {
+        recording
+            .messages(&|topic| topic == messages::SIM_VESSEL)
+            .map(|m| serde_json::from_slice::<messages::SimVesselRecord>(&m.unwrap().data).unwrap())
+            .filter(|r| (r.time - t).abs() < 1e-9)
+            .map(|r| (r.vessel, [r.truth[0], r.truth[1]]))
+            .collect()
+    };
+
+    let mut child = Command::new(BIN)
+        .args(["replay", "--bind", "127.0.0.1:0", "--speed", "1"])
+        .arg(&a)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut line = String::new();
+    BufReader::new(child.stdout.take().unwrap())
+        .read_line(&mut line)
+        .unwrap();
+    let replay = KillOnDrop(child);
+    let addr = line.trim().rsplit("http://").next().unwrap().to_string();
+    let url = |p: &str| format!("http://{addr}{p}");
+    let http = reqwest::Client::new();
+    let status: Value = http
+        .get(url("/api/v1/replay"))
+        .send()
+        .await
+        .unwrap()
+        .json()
+        .await
+        .unwrap();
+    assert_eq!(status["end"], json!(6.0), "{status}");
+    for t in [3.0, 5.0] {
+        let began = std::time::Instant::now();
+        let seek = http
+            .put(url("/api/v1/replay"))
+            .json(&json!({"playing": false, "time": t}))
+            .send()
+            .await
+            .unwrap();
+        assert!(seek.status().is_success());
+        let took = began.elapsed();
+        let vessels: Vec<Value> = http
+            .get(url("/api/v1/vessels"))
+            .send()
+            .await
+            .unwrap()
+            .json()
+            .await
+            .unwrap();
+        let truth = truth_at(t);
+        assert_eq!(vessels.len(), 8);
+        for v in &vessels {
+            let id = v["id"].as_str().unwrap();
+            let (x, y) = (
+                v["pose"]["x"].as_f64().unwrap(),
+                v["pose"]["y"].as_f64().unwrap(),
+            );
+            assert_eq!([x, y], truth[id], "{id} at {t} s");
+        }
+        let coverage: Value = http
+            .get(url("/api/v1/coverage"))
+            .send()
+            .await
+            .unwrap()
+            .json()
+            .await
+            .unwrap();
+        assert!((coverage["time"].as_f64().unwrap() - t).abs() < 1e-9);
+        eprintln!("seek to {t} s answered in {took:?}");
+    }
+    let write = http
+        .post(url("/api/v1/risk-objects"))
+        .json(&json!({"x": 30, "y": 40, "alpha": 20, "sigma": 10}))
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(write.status(), 409);
+    let body: Value = write.json().await.unwrap();
+    assert!(
+        body["error"]["message"]
+            .as_str()
+            .unwrap()
+            .contains("replay"),
+        "{body}"
+    );
+    drop(replay);
+}

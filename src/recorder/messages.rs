@@ -6,7 +6,7 @@
 //! Every channel is `json`-encoded with a `jsonschema` schema. Log time is
 //! mission time [ns]; publish time the wall clock [ns since the Unix epoch]
 //! (in `seacover sim`, which has no wall clock, the mission time again, so
-//! that a seed gives the same file).
+//! that a seed gives the same messages).
 //!
 //! The two Foxglove channels ([`LocationFix`], [`GeoJson`]) use Foxglove's
 //! schema names and field names, which is what its Map panel looks for.

@@ -53,7 +53,7 @@ const CAPACITY: usize = 65_536;
 pub struct RecorderConfig {
     pub target: Target,
     /// Publish times from the wall clock (the coordinator) or equal to the
-    /// log times (the simulator, so that a seed gives the same file).
+    /// log times (the simulator, so that a seed gives the same messages).
     pub wall_clock: bool,
 }
 

@@ -8,7 +8,7 @@
 //! partition (the run keeps H and centroids, not every cell): evaluation
 //! is deterministic, so the cells are the run's. Publish times are the log
 //! times and the writer blocks instead of dropping, so the same seed gives
-//! the same file.
+//! the same messages.
 
 use std::path::Path;
 use std::sync::Arc;
