@@ -804,3 +804,120 @@ async fn the_dashboard_places_the_map_on_the_globe() {
     stop.cancel();
     server.await.unwrap().unwrap();
 }
+
+/// `seacover replay` in the browser: the replay bar appears, and a seek
+/// with its slider moves the vessels on the map to where the recording
+/// had them at that moment, forwards and backwards.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_dashboard_replays_a_recording() {
+    use seacover::recorder::messages::{self, SimVesselRecord};
+    use seacover::recorder::reader::Recording;
+    let Some((driver_path, chrome)) = browser_or_skip() else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("sim.mcap");
+    let ok = std::process::Command::new(env!("CARGO_BIN_EXE_seacover"))
+        .args([
+            "sim",
+            "--scenario",
+            "paper",
+            "--duration",
+            "6",
+            "--no-figures",
+        ])
+        .arg("--out")
+        .arg(dir.path().join("out"))
+        .arg("--record")
+        .arg(&file)
+        .stdout(std::process::Stdio::null())
+        .status()
+        .unwrap()
+        .success();
+    assert!(ok);
+    let recording = Recording::open(&file).unwrap();
+    let truth = |t: f64| -> Vec<(String, f64, f64)> {
+        let mut v: Vec<(String, f64, f64)> = recording
+            .messages(&|topic| topic == messages::SIM_VESSEL)
+            .map(|m| serde_json::from_slice::<SimVesselRecord>(&m.unwrap().data).unwrap())
+            .filter(|r| (r.time - t).abs() < 1e-9)
+            .map(|r| (r.vessel, r.truth[0], r.truth[1]))
+            .collect();
+        v.sort_by(|a, b| a.0.cmp(&b.0));
+        v
+    };
+    let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let addr = listener.local_addr().unwrap();
+    let stop = CancellationToken::new();
+    let server = tokio::spawn(seacover::server::replay::serve(
+        listener,
+        file.clone(),
+        1.0,
+        stop.clone(),
+    ));
+    let (_driver, port) = start_driver(&driver_path).await;
+    let client = open_browser(port, &chrome).await;
+    client.goto(&format!("http://{addr}/")).await.unwrap();
+    until(
+        &client,
+        "the replay bar",
+        "document.body.dataset.replay === 'true' && window.seacover.replay && window.seacover.state.snapshot",
+    )
+    .await;
+    // Paused first, with the button, as a user would.
+    client
+        .execute(
+            "if (window.seacover.replay.status().playing) document.getElementById('replay-play').click();",
+            vec![],
+        )
+        .await
+        .unwrap();
+    until(
+        &client,
+        "paused",
+        "!window.seacover.replay.status().playing",
+    )
+    .await;
+    for t in [4.0, 1.5] {
+        // The slider, moved and let go.
+        client
+            .execute(
+                "const s = document.getElementById('replay-time');
+                 s.value = String(arguments[0]);
+                 s.dispatchEvent(new Event('input'));
+                 s.dispatchEvent(new Event('change'));",
+                vec![json!(t)],
+            )
+            .await
+            .unwrap();
+        until(
+            &client,
+            &format!("the map at {t} s"),
+            &format!("Math.abs(window.seacover.state.snapshot.time - {t}) < 1e-9"),
+        )
+        .await;
+        let shown = client
+            .execute(
+                "return window.seacover.view.vessels
+                   .map(v => [v.id, v.pose.x, v.pose.y])
+                   .sort((a, b) => a[0] < b[0] ? -1 : 1);",
+                vec![],
+            )
+            .await
+            .unwrap();
+        let expected: Vec<Value> = truth(t)
+            .into_iter()
+            .map(|(id, x, y)| json!([id, x, y]))
+            .collect();
+        assert_eq!(shown, json!(expected), "the vessels on the map at {t} s");
+        screenshot(&client, &format!("replay-{t}")).await;
+    }
+    let errors = client
+        .execute("return window.__errors;", vec![])
+        .await
+        .unwrap();
+    assert!(errors.as_array().is_none_or(|e| e.is_empty()), "{errors}");
+    client.close().await.unwrap();
+    stop.cancel();
+    server.await.unwrap().unwrap();
+}

@@ -178,6 +178,14 @@ async fn a_run_is_recorded_whole() {
         .await
         .unwrap();
     assert!(posted.status().is_success());
+    // A geo-referenced mission adds Foxglove's map channels.
+    let origin = http
+        .put(url("/api/v1/mission/origin"))
+        .json(&json!({"lat": 59.91, "lon": 10.75}))
+        .send()
+        .await
+        .unwrap();
+    assert!(origin.status().is_success());
     let refused = http
         .put(url("/api/v1/mission/risk/base"))
         .body("not json")
@@ -218,7 +226,9 @@ async fn a_run_is_recorded_whole() {
         (commands_out..=commands_out + 3.0).contains(&commands),
         "{commands} commands recorded, {commands_out} written"
     );
-    assert_eq!(ours[messages::MISSION], 2, "the start and the change");
+    assert_eq!(ours[messages::MISSION], 3, "the start and the two changes");
+    assert!(ours[messages::MAP_CELLS] >= 1, "{ours:?}");
+    assert!(ours["/seacover/map/fix/usv-1"] >= 1, "{ours:?}");
     assert!(ours[messages::COVERAGE] > 20);
     let events: Vec<String> = recording
         .messages(&|t| t == messages::EVENTS)
@@ -242,6 +252,11 @@ async fn a_run_is_recorded_whole() {
         assert_eq!(theirs["counts"][topic], json!(n), "{topic}: {theirs}");
     }
     assert_eq!(theirs["schemas"][messages::POSE], "seacover.PoseRecord");
+    assert_eq!(theirs["schemas"][messages::MAP_CELLS], "foxglove.GeoJSON");
+    assert_eq!(
+        theirs["schemas"]["/seacover/map/fix/usv-1"],
+        "foxglove.LocationFix"
+    );
 }
 
 /// `kill -9` mid-run: the file has no summary, yet it reads — in Python's

@@ -6,6 +6,7 @@ import { write, askToken, token, showError } from "./api.js";
 import { MapView, ramp } from "./map.js";
 import { Series, drawChart } from "./charts.js";
 import { GeoOverlay } from "./geo-overlay.js";
+import { startReplayBar } from "./replay.js";
 
 const $ = (id) => document.getElementById(id);
 const canvas = $("map");
@@ -22,7 +23,12 @@ const state = {
   snapshots: 0,
 };
 // For people poking from the console, and for the browser tests.
-window.seacover = { view, state, geo };
+window.seacover = { view, state, geo, replay: null };
+// A replay's bar; a seek clears the trails, which would otherwise join the
+// old moment to the new one.
+startReplayBar(() => view.trails.clear()).then((bar) => {
+  window.seacover.replay = bar;
+});
 
 // ---- stream -----------------------------------------------------------------
 

@@ -48,6 +48,11 @@ const FILES: &[(&str, &str, &str)] = &[
         "text/javascript; charset=utf-8",
         include_str!("../../web/geo-overlay.js"),
     ),
+    (
+        "replay.js",
+        "text/javascript; charset=utf-8",
+        include_str!("../../web/replay.js"),
+    ),
 ];
 
 fn file(name: &str) -> Response {

@@ -1,0 +1,74 @@
+// The replay bar: shown only when the server is `seacover replay` (its
+// GET /api/v1/replay answers; a coordinator's is a 404). Play and pause,
+// speed, and a time slider that seeks (PUT /api/v1/replay); the replay's
+// next snapshot, on the same stream as a live coordinator's, moves the map.
+
+const $ = (id) => document.getElementById(id);
+
+export async function startReplayBar(onSeek) {
+  let status;
+  try {
+    const r = await fetch("/api/v1/replay");
+    if (!r.ok) return null;
+    status = await r.json();
+  } catch {
+    return null;
+  }
+  document.body.dataset.replay = "true";
+  $("replay-bar").hidden = false;
+  $("replay-file").textContent = status.file.split("/").pop();
+  const slider = $("replay-time");
+  slider.min = String(status.start);
+  slider.max = String(status.end);
+  slider.step = "0.1";
+  let dragging = false;
+
+  function show() {
+    $("replay-play").textContent = status.playing ? "pause" : "play";
+    if (!dragging) slider.value = String(status.time);
+    $("replay-label").textContent = `${status.time.toFixed(1)} / ${status.end.toFixed(1)} s`;
+    $("replay-speed").value = String(status.speed);
+  }
+
+  async function put(body) {
+    const r = await fetch("/api/v1/replay", {
+      method: "PUT",
+      headers: { "content-type": "application/json" },
+      body: JSON.stringify(body),
+    });
+    if (r.ok) {
+      status = await r.json();
+      show();
+    }
+    return status;
+  }
+
+  async function seek(time) {
+    onSeek();
+    return put({ time });
+  }
+
+  $("replay-play").addEventListener("click", () => put({ playing: !status.playing }));
+  $("replay-speed").addEventListener("change", () => put({ speed: Number($("replay-speed").value) }));
+  slider.addEventListener("input", () => {
+    dragging = true;
+    $("replay-label").textContent = `${Number(slider.value).toFixed(1)} / ${status.end.toFixed(1)} s`;
+  });
+  slider.addEventListener("change", async () => {
+    await seek(Number(slider.value));
+    dragging = false;
+  });
+  setInterval(async () => {
+    try {
+      const r = await fetch("/api/v1/replay");
+      if (r.ok) {
+        status = await r.json();
+        show();
+      }
+    } catch {
+      // The stream's status shows a lost server.
+    }
+  }, 500);
+  show();
+  return { seek, put, status: () => status };
+}
