@@ -305,7 +305,11 @@ async fn run_link(mut socket: WebSocket, app: AppState, peer: Option<SocketAddr>
                 Some(Ok(Message::Text(t))) => match parse(&t) {
                     Ok(VesselMessage::Pose(pose)) if finite(&pose) => {
                         poses_in.increment(1);
-                        app.recorder.pose(&vessel, app.clock.now(), &pose);
+                        // The clock is read only when recording: this runs
+                        // for every pose of every link.
+                        if app.recorder.is_on() {
+                            app.recorder.pose(&vessel, app.clock.now(), &pose);
+                        }
                         pose_tx.send_replace(Some(pose));
                     }
                     Ok(VesselMessage::Pose(_)) => {
