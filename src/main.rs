@@ -69,9 +69,10 @@ enum Command {
         /// Start a new recording file after this many MiB.
         #[arg(long, default_value_t = 256)]
         record_max_mb: u64,
-        /// Start a new recording file after this many minutes.
-        #[arg(long, default_value_t = 60)]
-        record_max_minutes: u64,
+        /// Start a new recording file after this many minutes (fractions
+        /// allowed: 0.5 is thirty seconds).
+        #[arg(long, default_value_t = 60.0, value_parser = positive_minutes)]
+        record_max_minutes: f64,
     },
     /// Run simulated vessels, each on its own link to a coordinator; or,
     /// with --mavlink, bridge real autopilots (ArduPilot boats) onto it.
@@ -320,9 +321,8 @@ fn main() -> ExitCode {
                 target: seacover::recorder::Target::Directory {
                     dir: data_dir.join("recordings"),
                     max_bytes: record_max_mb.saturating_mul(1024 * 1024),
-                    max_duration: std::time::Duration::from_secs(
-                        record_max_minutes.saturating_mul(60),
-                    ),
+                    max_duration: std::time::Duration::try_from_secs_f64(record_max_minutes * 60.0)
+                        .unwrap_or(std::time::Duration::MAX),
                 },
                 wall_clock: true,
             });
@@ -908,6 +908,14 @@ fn safety_study(
         out.display()
     );
     Ok(())
+}
+
+/// `--record-max-minutes`: a positive, finite number of minutes.
+fn positive_minutes(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(m) if m.is_finite() && m > 0.0 => Ok(m),
+        _ => Err(format!("{s:?} is not a positive number of minutes")),
+    }
 }
 
 fn fail(code: &str, message: String) -> ExitCode {

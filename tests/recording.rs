@@ -375,6 +375,111 @@ async fn off_unwritable_and_rotation() {
     }
 }
 
+/// `--record-max-minutes` rotates by age (here 3 s of wall time), and the
+/// events channel tells a link's story with who and why: its link up with
+/// the peer, a refused frame (code, peer), its fall into silence (liveness
+/// takeover) and its return, a refused request (code, peer), the link down
+/// and the shutdown; a story told across the rotated files.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn rotation_by_age_and_a_links_events() {
+    use futures_util::SinkExt;
+    use tokio_tungstenite::tungstenite::Message;
+    let data = tempfile::tempdir().unwrap();
+    let mut server = serve(data.path(), &["--record-max-minutes", "0.05"]);
+    let http = reqwest::Client::new();
+    let ws = format!("ws://{}/api/v1/vessels/link", server.addr);
+    let pose = |x: f64| {
+        Message::text(
+            json!({"type": "pose", "t": 0, "x": x, "y": 20, "psi": 0, "u": 0, "v": 0, "r": 0})
+                .to_string(),
+        )
+    };
+    let (mut sink, mut stream) = common::link::hello(ws, "probe").await;
+    sink.send(pose(10.0)).await.ok().unwrap();
+    sink.send(Message::text("not a frame")).await.ok().unwrap();
+    let error = loop {
+        let frame = common::link::next_json(&mut stream).await;
+        assert!(!frame.is_null(), "the link stays open after a refused frame");
+        if frame["type"] != "command" {
+            break frame;
+        }
+    };
+    assert_eq!(error["type"], "error", "{error}");
+    // The link reads what it is sent (a link must keep up) until it closes.
+    let drain =
+        tokio::spawn(
+            async move { while common::link::next_json(&mut stream).await != Value::Null {} },
+        );
+    // Silent for 2 s of wall time: 8 s of mission time at warp 4, past
+    // the 3 s liveness timeout. The link stays open, so only liveness can
+    // take the vessel out.
+    tokio::time::sleep(Duration::from_secs(2)).await;
+    sink.send(pose(11.0)).await.ok().unwrap();
+    let refused = http
+        .post(format!("http://{}/api/v1/risk-objects", server.addr))
+        .json(&json!({"x": 30, "y": 40, "alpha": -1, "sigma": 10}))
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(refused.status(), 422);
+    let dir = data.path().to_path_buf();
+    eventually(20, "three files, rotated by age", || async {
+        recordings(&dir).len() >= 3
+    })
+    .await;
+    drop(sink);
+    let _ = drain.await;
+    tokio::time::sleep(Duration::from_millis(500)).await;
+    signal(&server.child, "-TERM");
+    server.child.wait().unwrap();
+
+    let files = recordings(&dir);
+    let mut events = Vec::new();
+    for file in &files {
+        let r = Recording::open(file).unwrap();
+        assert!(!r.recovered(), "{file:?} was finished when rotated");
+        let first = r.messages(&|_| true).next().expect("not empty").unwrap();
+        assert_eq!(&*first.topic, messages::MISSION, "{file:?}");
+        // Rotated by age, not size: every file is far below 256 MiB.
+        assert!(std::fs::metadata(file).unwrap().len() < 1 << 20);
+        events.extend(
+            r.messages(&|t| t == messages::EVENTS)
+                .map(|m| serde_json::from_slice::<Value>(&m.unwrap().data).unwrap()),
+        );
+    }
+    let find = |kind: &str| {
+        events
+            .iter()
+            .find(|e| e["kind"] == kind)
+            .unwrap_or_else(|| panic!("no {kind} in {events:?}"))
+            .clone()
+    };
+    let local = |e: &Value| {
+        e["peer"]
+            .as_str()
+            .is_some_and(|p| p.starts_with("127.0.0.1:"))
+    };
+    let up = find("link_up");
+    assert!(up["vessel"] == "probe" && local(&up), "{up}");
+    let frame = find("rejected_frame");
+    assert!(frame["vessel"] == "probe" && local(&frame), "{frame}");
+    assert_eq!(frame["code"], error["code"], "{frame}");
+    let takeover = find("liveness_takeover");
+    let regained = find("liveness_regained");
+    assert_eq!(takeover["vessel"], "probe");
+    assert_eq!(regained["vessel"], "probe");
+    assert!(
+        takeover["time"].as_f64().unwrap() > frame["time"].as_f64().unwrap()
+            && regained["time"].as_f64().unwrap() > takeover["time"].as_f64().unwrap(),
+        "{events:?}"
+    );
+    let request = find("rejected_request");
+    assert!(local(&request), "{request}");
+    assert_eq!(request["code"], "invalid", "{request}");
+    assert_eq!(find("link_down")["vessel"], "probe");
+    find("shutdown");
+}
+
 struct KillOnDrop(Child);
 
 impl Drop for KillOnDrop {

@@ -129,6 +129,8 @@ impl MissionClock {
 #[derive(Debug, Clone)]
 pub struct Recorder {
     tx: Option<SyncSender<Entry>>,
+    /// The writer thread, to wake (see [`writer`]'s `IDLE_WAKE`).
+    writer: Option<std::thread::Thread>,
     blocking: bool,
 }
 
@@ -149,6 +151,7 @@ impl Recorder {
     pub fn off() -> Recorder {
         Recorder {
             tx: None,
+            writer: None,
             blocking: false,
         }
     }
@@ -164,6 +167,7 @@ impl Recorder {
         (
             Recorder {
                 tx: Some(tx),
+                writer: Some(thread.thread().clone()),
                 blocking,
             },
             RecorderThread(Some(thread)),
@@ -174,17 +178,30 @@ impl Recorder {
         self.tx.is_some()
     }
 
+    /// Hands `entry` over. A tick (handed over once its commands are
+    /// written) or the finish wakes the writer; other entries wait for it.
     pub fn record(&self, entry: Entry) {
         let Some(tx) = &self.tx else { return };
-        if self.blocking {
-            let _ = tx.send(entry);
-            return;
-        }
+        let wake = matches!(entry, Entry::Tick(_) | Entry::Finish);
         match tx.try_send(entry) {
             Ok(()) => {}
+            Err(TrySendError::Full(entry)) if self.blocking => {
+                // The simulator waits for the writer rather than drop.
+                self.wake();
+                let _ = tx.send(entry);
+            }
             Err(TrySendError::Full(_) | TrySendError::Disconnected(_)) => {
                 metrics::counter!(DROPPED).increment(1);
             }
+        }
+        if wake {
+            self.wake();
+        }
+    }
+
+    fn wake(&self) {
+        if let Some(w) = &self.writer {
+            w.unpark();
         }
     }
 
@@ -218,7 +235,9 @@ impl Recorder {
     pub fn finish(&self) {
         if let Some(tx) = &self.tx {
             // Blocking: the end of the file must not be dropped.
+            self.wake();
             let _ = tx.send(Entry::Finish);
+            self.wake();
         }
     }
 }
