@@ -237,11 +237,7 @@ impl Bridge {
 
     /// SIGTERM, then the log's last "bridge stopped" line's fields.
     fn stop(mut self) -> serde_json::Value {
-        let status = Command::new("kill")
-            .args(["-TERM", &self.child.id().to_string()])
-            .status()
-            .unwrap();
-        assert!(status.success());
+        common::process::signal(self.child.id(), "-TERM");
         let exit = self.child.wait().unwrap();
         assert!(exit.success(), "the bridge exited with {exit}");
         std::thread::sleep(Duration::from_millis(200));
@@ -595,14 +591,8 @@ async fn four_boats_converge_follow_conventions_yield_to_the_operator_and_stop_w
             continue;
         }
         // H now, against H with every boat at its centroid.
-        let coverage: CoverageDocument = http
-            .get(coordinator.url("/api/v1/coverage"))
-            .send()
-            .await
-            .unwrap()
-            .json()
-            .await
-            .unwrap();
+        let coverage: CoverageDocument =
+            common::server::get_json(&http, &coordinator.url("/api/v1/coverage")).await;
         let at_centroids = json!({"vessels": all.iter().map(|v| {
             let c = v.centroid.unwrap();
             json!({"id": v.id, "x": c[0], "y": c[1]})
@@ -788,17 +778,10 @@ async fn four_boats_converge_follow_conventions_yield_to_the_operator_and_stop_w
     // A coordinator that hangs (SIGSTOP: its sockets stay open, nothing
     // comes): the commands age past 1 s and the boats stop; it wakes and
     // they go on.
-    let signal = |sig: &str, pid: u32| {
-        let status = Command::new("kill")
-            .args([sig, &pid.to_string()])
-            .status()
-            .unwrap();
-        assert!(status.success());
-    };
-    signal("-STOP", coordinator.child.id());
+    common::process::signal(coordinator.child.id(), "-STOP");
     let hung: Vec<u32> = stations.iter().map(|s| s.seen(Seen::clock_ms)).collect();
     let stopped_hung = all_stopped(&stations, &hung).await;
-    signal("-CONT", coordinator.child.id());
+    common::process::signal(coordinator.child.id(), "-CONT");
     println!(
         "d. coordinator hung (SIGSTOP): every boat below 0.3 m/s within {stopped_hung:.1} s of its clock"
     );
@@ -1140,14 +1123,7 @@ async fn bad_mavlink_input_changes_nothing() {
     // A lost vehicle: the autopilot frozen (SIGSTOP), so no HEARTBEAT; the
     // bridge stops reporting it and the coordinator's liveness timeout
     // takes it out of the partition. Thawed, it rejoins.
-    let signal = |sig: &str| {
-        let status = Command::new("kill")
-            .args([sig, &real.child.id().to_string()])
-            .status()
-            .unwrap();
-        assert!(status.success());
-    };
-    signal("-STOP");
+    common::process::signal(real.child.id(), "-STOP");
     let frozen = Instant::now();
     let gone = wait_for(Duration::from_secs(10), async || {
         let vs = coordinator.vessels(&http).await;
@@ -1156,7 +1132,7 @@ async fn bad_mavlink_input_changes_nothing() {
             .then(|| frozen.elapsed())
     })
     .await;
-    signal("-CONT");
+    common::process::signal(real.child.id(), "-CONT");
     let gone = gone.expect("a silent vehicle's link closed and its cell handed over");
     let thawed = Instant::now();
     let back = wait_for(Duration::from_secs(10), async || {

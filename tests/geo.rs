@@ -6,11 +6,12 @@
 
 mod common;
 
-use std::process::{Child, Command};
+use std::process::Child;
 use std::time::Duration;
 
 use common::geo::{Origin, at_lat_lon, locate, polygon, ring};
 use common::link::hello;
+use common::process::signal;
 use common::server::{eventually, mission, spawn_server};
 use futures_util::{SinkExt, StreamExt};
 use geographiclib_rs::{Geodesic, PolygonArea, Winding};
@@ -258,11 +259,7 @@ async fn an_acknowledged_origin_and_geojson_region_survive_sigkill() {
 }
 
 fn kill_9(child: &mut Child) {
-    let status = Command::new("kill")
-        .args(["-KILL", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(status.success());
+    signal(child.id(), "-KILL");
     let _ = child.wait();
 }
 

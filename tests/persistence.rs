@@ -14,7 +14,8 @@ use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::Duration;
 
-use common::server::{eventually, mission, serve_command, spawn_server, start};
+use common::process::signal;
+use common::server::{eventually, get_json, mission, serve_command, spawn_server, start};
 use rand::{RngExt, SeedableRng};
 use seacover::agent::{AgentConfig, paper_vessels, run_fleet};
 use seacover::control::model::VesselParams;
@@ -130,11 +131,7 @@ async fn sigkill_during_writes_loses_nothing_acknowledged() {
             let pid = child.id();
             tokio::spawn(async move {
                 tokio::time::sleep(kill_after).await;
-                let status = Command::new("kill")
-                    .args(["-KILL", &pid.to_string()])
-                    .status()
-                    .unwrap();
-                assert!(status.success());
+                signal(pid, "-KILL");
             })
         };
         let in_flight = loop {
@@ -260,14 +257,7 @@ async fn vessels_reconnect_after_a_restart_and_find_the_mission_intact() {
         .await
         .unwrap();
     assert_eq!(r.status(), 200);
-    let before: MissionDocument = http
-        .get(format!("{base}/api/v1/mission"))
-        .send()
-        .await
-        .unwrap()
-        .json()
-        .await
-        .unwrap();
+    let before: MissionDocument = get_json(&http, &format!("{base}/api/v1/mission")).await;
     stop.cancel();
     tokio::time::timeout(Duration::from_secs(5), task)
         .await
@@ -276,23 +266,10 @@ async fn vessels_reconnect_after_a_restart_and_find_the_mission_intact() {
 
     let (addr2, stop, task) = start_in_process(&addr.to_string(), dir.path()).await;
     assert_eq!(addr2, addr);
-    let after: MissionDocument = http
-        .get(format!("{base}/api/v1/mission"))
-        .send()
-        .await
-        .unwrap()
-        .json()
-        .await
-        .unwrap();
+    let after: MissionDocument = get_json(&http, &format!("{base}/api/v1/mission")).await;
     assert_eq!(after, before, "the mission changed across the restart");
-    let objects: Vec<RiskObjectDocument> = http
-        .get(format!("{base}/api/v1/risk-objects"))
-        .send()
-        .await
-        .unwrap()
-        .json()
-        .await
-        .unwrap();
+    let objects: Vec<RiskObjectDocument> =
+        get_json(&http, &format!("{base}/api/v1/risk-objects")).await;
     assert_eq!(objects.last().unwrap().id.as_deref(), Some("kept"));
 
     // The agents' backoff tops out at 5 s; they come back on their own and

@@ -12,7 +12,8 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::Duration;
 
-use common::server::{eventually, start};
+use common::process::{KillOnDrop, signal};
+use common::server::{eventually, get_json, start};
 use seacover::recorder::messages;
 use seacover::recorder::reader::Recording;
 use serde_json::{Value, json};
@@ -107,15 +108,6 @@ fn agents(addr: &str, n: usize) -> Child {
         .unwrap()
 }
 
-fn signal(child: &Child, sig: &str) {
-    let ok = Command::new("kill")
-        .args([sig, &child.id().to_string()])
-        .status()
-        .unwrap()
-        .success();
-    assert!(ok);
-}
-
 fn recordings(data: &Path) -> Vec<PathBuf> {
     let mut files: Vec<PathBuf> = std::fs::read_dir(data.join("recordings"))
         .map(|d| d.map(|e| e.unwrap().path()).collect())
@@ -160,14 +152,7 @@ async fn a_run_is_recorded_whole() {
     let mut fleet = agents(&server.addr, 3);
     let url = |p: &str| format!("http://{}{p}", server.addr);
     eventually(20, "three vessels commanded", || async {
-        let v: Vec<Value> = http
-            .get(url("/api/v1/vessels"))
-            .send()
-            .await
-            .unwrap()
-            .json()
-            .await
-            .unwrap();
+        let v: Vec<Value> = get_json(&http, &url("/api/v1/vessels")).await;
         v.len() == 3 && v.iter().all(|v| !v["last_command"].is_null())
     })
     .await;
@@ -195,7 +180,7 @@ async fn a_run_is_recorded_whole() {
     assert_eq!(refused.status(), 400);
     tokio::time::sleep(Duration::from_secs(2)).await;
     // The fleet stops first, so that what the coordinator counted is final.
-    signal(&fleet, "-TERM");
+    signal(fleet.id(), "-TERM");
     fleet.wait().unwrap();
     tokio::time::sleep(Duration::from_millis(500)).await;
     let poses_in = metric(&http, &server.addr, "seacover_messages_in_total", "pose").await;
@@ -207,7 +192,7 @@ async fn a_run_is_recorded_whole() {
     )
     .await;
     let mut server = server;
-    signal(&server.child, "-TERM");
+    signal(server.child.id(), "-TERM");
     server.child.wait().unwrap();
 
     let files = recordings(data.path());
@@ -274,14 +259,7 @@ async fn a_killed_coordinator_leaves_a_readable_recording() {
     })
     .await;
     tokio::time::sleep(Duration::from_secs(3)).await;
-    let before = http
-        .get(format!("http://{addr}/api/v1/coverage"))
-        .send()
-        .await
-        .unwrap()
-        .json::<Value>()
-        .await
-        .unwrap();
+    let before: Value = get_json(&http, &format!("http://{addr}/api/v1/coverage")).await;
     server.child.kill().unwrap(); // SIGKILL
     server.child.wait().unwrap();
     let _ = fleet.kill();
@@ -365,7 +343,7 @@ async fn off_unwritable_and_rotation() {
     let dir = rotated.path().to_path_buf();
     eventually(20, "three files", || async { recordings(&dir).len() >= 3 }).await;
     drop(KillOnDrop(fleet));
-    signal(&server.child, "-TERM");
+    signal(server.child.id(), "-TERM");
     server.child.wait().unwrap();
     for file in recordings(&dir) {
         let r = Recording::open(&file).unwrap();
@@ -399,7 +377,10 @@ async fn rotation_by_age_and_a_links_events() {
     sink.send(Message::text("not a frame")).await.ok().unwrap();
     let error = loop {
         let frame = common::link::next_json(&mut stream).await;
-        assert!(!frame.is_null(), "the link stays open after a refused frame");
+        assert!(
+            !frame.is_null(),
+            "the link stays open after a refused frame"
+        );
         if frame["type"] != "command" {
             break frame;
         }
@@ -430,7 +411,7 @@ async fn rotation_by_age_and_a_links_events() {
     drop(sink);
     let _ = drain.await;
     tokio::time::sleep(Duration::from_millis(500)).await;
-    signal(&server.child, "-TERM");
+    signal(server.child.id(), "-TERM");
     server.child.wait().unwrap();
 
     let files = recordings(&dir);
@@ -478,15 +459,6 @@ async fn rotation_by_age_and_a_links_events() {
     assert_eq!(request["code"], "invalid", "{request}");
     assert_eq!(find("link_down")["vessel"], "probe");
     find("shutdown");
-}
-
-struct KillOnDrop(Child);
-
-impl Drop for KillOnDrop {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
 }
 
 /// `sim --record`: the same seed gives the same messages; the
@@ -561,14 +533,7 @@ async fn a_simulation_records_the_same_file_and_replays() {
     let addr = line.trim().rsplit("http://").next().unwrap().to_string();
     let url = |p: &str| format!("http://{addr}{p}");
     let http = reqwest::Client::new();
-    let status: Value = http
-        .get(url("/api/v1/replay"))
-        .send()
-        .await
-        .unwrap()
-        .json()
-        .await
-        .unwrap();
+    let status: Value = get_json(&http, &url("/api/v1/replay")).await;
     assert_eq!(status["end"], json!(6.0), "{status}");
     for t in [3.0, 5.0] {
         let began = std::time::Instant::now();
@@ -580,14 +545,7 @@ async fn a_simulation_records_the_same_file_and_replays() {
             .unwrap();
         assert!(seek.status().is_success());
         let took = began.elapsed();
-        let vessels: Vec<Value> = http
-            .get(url("/api/v1/vessels"))
-            .send()
-            .await
-            .unwrap()
-            .json()
-            .await
-            .unwrap();
+        let vessels: Vec<Value> = get_json(&http, &url("/api/v1/vessels")).await;
         let truth = truth_at(t);
         assert_eq!(vessels.len(), 8);
         for v in &vessels {
@@ -598,14 +556,7 @@ async fn a_simulation_records_the_same_file_and_replays() {
             );
             assert_eq!([x, y], truth[id], "{id} at {t} s");
         }
-        let coverage: Value = http
-            .get(url("/api/v1/coverage"))
-            .send()
-            .await
-            .unwrap()
-            .json()
-            .await
-            .unwrap();
+        let coverage: Value = get_json(&http, &url("/api/v1/coverage")).await;
         assert!((coverage["time"].as_f64().unwrap() - t).abs() < 1e-9);
         eprintln!("seek to {t} s answered in {took:?}");
     }

@@ -1,10 +1,13 @@
 //! The real `seacover serve` process: SIGTERM stops it within 2 s, and a
 //! linked vessel is told why.
 
+mod common;
+
 use std::io::{BufRead, BufReader};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
+use common::process::signal;
 use futures_util::{SinkExt, StreamExt};
 use serde_json::{Value, json};
 use tokio_tungstenite::tungstenite::Message;
@@ -38,11 +41,7 @@ async fn sigterm_stops_the_server_within_two_seconds() {
     assert!(welcome.to_text().unwrap().contains("welcome"));
 
     let started = Instant::now();
-    let status = Command::new("kill")
-        .args(["-TERM", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(status.success());
+    signal(child.id(), "-TERM");
     // The vessel hears why the link ends.
     let mut told = false;
     while let Ok(Some(Ok(msg))) = tokio::time::timeout(Duration::from_secs(3), stream.next()).await

@@ -161,7 +161,7 @@ pub fn print_info(info: &Info, out: &mut impl Write) -> std::io::Result<()> {
         out,
         "vessels   {} ({})",
         info.vessels.len(),
-        info.vessels.join(", ")
+        names(&info.vessels)
     )?;
     let h = |v: Option<f64>| v.map_or("-".to_string(), |h| format!("{h:.6}"));
     writeln!(
@@ -190,6 +190,21 @@ pub fn print_info(info: &Info, out: &mut impl Write) -> std::io::Result<()> {
         }
     }
     Ok(())
+}
+
+/// A fleet's ids for one line: all of a small fleet, the first few and the
+/// last of a big one (`--json` lists them all).
+fn names(ids: &[String]) -> String {
+    const SHOWN: usize = 12;
+    if ids.len() <= SHOWN {
+        return ids.join(", ");
+    }
+    format!(
+        "{}, … {} more …, {}",
+        ids[..SHOWN - 1].join(", "),
+        ids.len() - SHOWN,
+        ids[ids.len() - 1]
+    )
 }
 
 /// Export formats.
@@ -367,4 +382,22 @@ fn coverage_csv(recording: &Recording, out: &mut impl Write) -> Result<(), Inspe
         writeln!(out)?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::names;
+
+    #[test]
+    fn a_big_fleet_is_named_in_one_short_line() {
+        let few: Vec<String> = (1..=3).map(|i| format!("usv-{i}")).collect();
+        assert_eq!(names(&few), "usv-1, usv-2, usv-3");
+        let many: Vec<String> = (1..=1000).map(|i| format!("v{i:04}")).collect();
+        let line = names(&many);
+        assert!(
+            line.starts_with("v0001, v0002,") && line.ends_with(", v1000"),
+            "{line}"
+        );
+        assert!(line.contains("… 988 more …") && line.len() < 120, "{line}");
+    }
 }

@@ -306,15 +306,15 @@ impl Recording {
         wanted: &dyn Fn(&str) -> bool,
     ) -> impl Iterator<Item = Result<Message, ReadError>> + '_ {
         let ids = self.channel_ids(wanted);
-        (0..self.chunks.len())
-            .filter(move |&i| Self::holds(&self.chunks[i], &ids))
-            .flat_map({
-                let ids = self.channel_ids(wanted);
-                move |i| match self.chunk_messages(i, &ids) {
-                    Ok(ms) => ms.into_iter().map(Ok).collect::<Vec<_>>(),
-                    Err(e) => vec![Err(e)],
-                }
-            })
+        (0..self.chunks.len()).flat_map(move |i| {
+            if !Self::holds(&self.chunks[i], &ids) {
+                return Vec::new();
+            }
+            match self.chunk_messages(i, &ids) {
+                Ok(ms) => ms.into_iter().map(Ok).collect(),
+                Err(e) => vec![Err(e)],
+            }
+        })
     }
 
     /// The messages with log times in `[from, to]` on the topics `wanted`

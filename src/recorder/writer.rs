@@ -12,7 +12,7 @@
 
 use std::collections::HashMap;
 use std::fs::File;
-use std::io::BufWriter;
+use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::{Receiver, TryRecvError};
 use std::time::{Duration, Instant};
@@ -160,8 +160,12 @@ impl Writer {
             metrics::counter!(ERRORS).increment(1);
             metrics::gauge!(ACTIVE).set(0.0);
             self.failed = true;
-            // What was written before stays readable (whole chunks); the
-            // summary is not attempted on a writer that has failed.
+            // What was written before stays readable (whole chunks). The
+            // failed writer is not dropped: when a chunk fails to start
+            // (mcap 0.24, `start_chunk`), mcap drops its file and keeps no
+            // state, and its Drop (which finishes the file) then panics
+            // ("self.writer should never be None"; the test below hits
+            // it). Forgetting leaks only bookkeeping, once per process.
             if let Some(f) = self.file.take() {
                 std::mem::forget(f.mcap);
             }
@@ -239,7 +243,6 @@ impl Writer {
                 source,
             })?;
             let mut inner = f.mcap.into_inner();
-            use std::io::Write;
             inner.flush().map_err(|source| RecordError::File {
                 path: f.path.clone(),
                 source,
@@ -567,5 +570,38 @@ mod tests {
         let b = unused_name(dir.path(), "2026-11-23T10-00-00Z");
         assert_eq!(b.file_name().unwrap(), "2026-11-23T10-00-00Z-1.mcap");
         assert!(utc_stamp().ends_with('Z'));
+    }
+
+    /// A full disk (Linux's /dev/full answers every write with ENOSPC)
+    /// stops the recording at its first flush, and nothing panics or
+    /// writes on: the writer is dropped without finishing the file.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn a_full_disk_stops_the_recording() {
+        let mut w = Writer::new(RecorderConfig {
+            target: Target::File("/dev/full".into()),
+            wall_clock: false,
+        });
+        w.guard(|w| w.open());
+        assert!(
+            !w.failed && w.file.is_some(),
+            "opening buffers, writes nothing"
+        );
+        for i in 0..100 {
+            let event = EventRecord::new(f64::from(i) * 0.1, messages::EventKind::LinkUp);
+            w.guard(|w| w.write(Entry::Event(event)));
+        }
+        w.guard(|w| w.flush());
+        assert!(w.failed, "ENOSPC fails the recording");
+        assert!(w.file.is_none());
+        // Whatever comes after is dropped, not written.
+        w.guard(|w| {
+            w.write(Entry::Event(EventRecord::new(
+                11.0,
+                messages::EventKind::Shutdown,
+            )))
+        });
+        w.guard(|w| w.close());
+        assert!(w.failed && w.file.is_none());
     }
 }

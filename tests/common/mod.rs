@@ -4,4 +4,5 @@
 
 pub mod geo;
 pub mod link;
+pub mod process;
 pub mod server;

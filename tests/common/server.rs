@@ -38,14 +38,13 @@ pub fn spawn_server(data: &Path, config: &Path) -> (Child, String) {
     start(command)
 }
 
+/// GETs `url` and decodes its JSON body, unwrapping both.
+pub async fn get_json<T: serde::de::DeserializeOwned>(http: &reqwest::Client, url: &str) -> T {
+    http.get(url).send().await.unwrap().json().await.unwrap()
+}
+
 pub async fn mission(http: &reqwest::Client, addr: &str) -> MissionDocument {
-    http.get(format!("http://{addr}/api/v1/mission"))
-        .send()
-        .await
-        .unwrap()
-        .json()
-        .await
-        .unwrap()
+    get_json(http, &format!("http://{addr}/api/v1/mission")).await
 }
 
 /// Polls `check` every 100 ms for up to `secs`.
