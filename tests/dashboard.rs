@@ -816,25 +816,7 @@ async fn the_dashboard_replays_a_recording() {
         return;
     };
     let dir = tempfile::tempdir().unwrap();
-    let file = dir.path().join("sim.mcap");
-    let ok = std::process::Command::new(env!("CARGO_BIN_EXE_seacover"))
-        .args([
-            "sim",
-            "--scenario",
-            "paper",
-            "--duration",
-            "6",
-            "--no-figures",
-        ])
-        .arg("--out")
-        .arg(dir.path().join("out"))
-        .arg("--record")
-        .arg(&file)
-        .stdout(std::process::Stdio::null())
-        .status()
-        .unwrap()
-        .success();
-    assert!(ok);
+    let file = common::server::record_sim(dir.path(), "sim");
     let recording = Recording::open(&file).unwrap();
     let truth = |t: f64| -> Vec<(String, f64, f64)> {
         let mut v: Vec<(String, f64, f64)> = recording

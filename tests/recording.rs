@@ -13,7 +13,7 @@ use std::process::{Child, Command, Stdio};
 use std::time::Duration;
 
 use common::process::{KillOnDrop, signal};
-use common::server::{eventually, get_json, start};
+use common::server::{eventually, get_json, record_sim, start, start_saying};
 use seacover::recorder::messages;
 use seacover::recorder::reader::Recording;
 use serde_json::{Value, json};
@@ -466,30 +466,8 @@ async fn rotation_by_age_and_a_links_events() {
 /// at that moment; the replay refuses writes.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_simulation_records_the_same_file_and_replays() {
-    use std::io::{BufRead, BufReader};
     let dir = tempfile::tempdir().unwrap();
-    let run = |name: &str| {
-        let file = dir.path().join(format!("{name}.mcap"));
-        let ok = Command::new(BIN)
-            .args([
-                "sim",
-                "--scenario",
-                "paper",
-                "--duration",
-                "6",
-                "--no-figures",
-            ])
-            .arg("--out")
-            .arg(dir.path().join(name))
-            .arg("--record")
-            .arg(&file)
-            .stdout(Stdio::null())
-            .status()
-            .unwrap()
-            .success();
-        assert!(ok);
-        file
-    };
+    let run = |name: &str| record_sim(dir.path(), name);
     let (a, b) = (run("a"), run("b"));
     // The same messages (the summary's order of channels is the mcap
     // crate's hash map order, so the files' bytes may differ there).
@@ -518,19 +496,14 @@ async fn a_simulation_records_the_same_file_and_replays() {
             .collect()
     };
 
-    let mut child = Command::new(BIN)
+    let mut command = Command::new(BIN);
+    command
         .args(["replay", "--bind", "127.0.0.1:0", "--speed", "1"])
         .arg(&a)
         .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let mut line = String::new();
-    BufReader::new(child.stdout.take().unwrap())
-        .read_line(&mut line)
-        .unwrap();
+        .stderr(Stdio::null());
+    let (child, addr) = start_saying(command, "seacover: replaying");
     let replay = KillOnDrop(child);
-    let addr = line.trim().rsplit("http://").next().unwrap().to_string();
     let url = |p: &str| format!("http://{addr}{p}");
     let http = reqwest::Client::new();
     let status: Value = get_json(&http, &url("/api/v1/replay")).await;

@@ -1,7 +1,7 @@
 //! The real `seacover serve` binary on port 0, as an operator runs it.
 
 use std::io::{BufRead, BufReader};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::Duration;
 
@@ -20,13 +20,19 @@ pub fn serve_command(data: &Path, config: &Path) -> Command {
 }
 
 /// Starts `command` and returns it with the address it printed.
-pub fn start(mut command: Command) -> (Child, String) {
+pub fn start(command: Command) -> (Child, String) {
+    start_saying(command, "seacover: serving on")
+}
+
+/// Starts `command`, whose first line must begin with `first`, and returns
+/// it with the address that line ends with.
+pub fn start_saying(mut command: Command, first: &str) -> (Child, String) {
     let mut child = command.spawn().unwrap();
     let mut line = String::new();
     BufReader::new(child.stdout.take().unwrap())
         .read_line(&mut line)
         .unwrap();
-    assert!(line.starts_with("seacover: serving on"), "{line:?}");
+    assert!(line.starts_with(first), "{line:?}");
     let addr = line.trim().rsplit("http://").next().unwrap().to_string();
     (child, addr)
 }
@@ -58,4 +64,29 @@ where
         assert!(tokio::time::Instant::now() < deadline, "timed out: {what}");
         tokio::time::sleep(Duration::from_millis(100)).await;
     }
+}
+
+/// `seacover sim` of the paper's scenario for 6 s, recorded: its figures
+/// and CSV in `dir/name`, the recording `dir/name.mcap`, which it returns.
+pub fn record_sim(dir: &Path, name: &str) -> PathBuf {
+    let file = dir.join(format!("{name}.mcap"));
+    let ok = Command::new(env!("CARGO_BIN_EXE_seacover"))
+        .args([
+            "sim",
+            "--scenario",
+            "paper",
+            "--duration",
+            "6",
+            "--no-figures",
+        ])
+        .arg("--out")
+        .arg(dir.join(name))
+        .arg("--record")
+        .arg(&file)
+        .stdout(Stdio::null())
+        .status()
+        .unwrap()
+        .success();
+    assert!(ok, "seacover sim --record {}", file.display());
+    file
 }
