@@ -73,6 +73,9 @@ pub fn valid_id(id: &str) -> bool {
 /// WGS84 placed in the plane of its origin (see [`crate::georef::input`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct LocalScenario {
+    /// The origin of the plane the document was placed in (its own, or the
+    /// fallback), if any.
+    pub origin: Option<OriginDocument>,
     pub region: Option<RegionDocument>,
     pub risk: Option<RiskDocument>,
     pub vessels: Vec<VesselDocument>,
@@ -95,9 +98,11 @@ pub fn localize(
     fallback: Option<OriginDocument>,
 ) -> Result<LocalScenario, ScenarioError> {
     use crate::georef::input;
-    let frame = input::frame(doc.origin.or(fallback))?;
+    let origin = doc.origin.or(fallback);
+    let frame = input::frame(origin)?;
     let frame = frame.as_ref();
     Ok(LocalScenario {
+        origin,
         region: doc
             .region
             .as_ref()

@@ -550,3 +550,71 @@ async fn a_simulation_records_the_same_file_and_replays() {
     );
     drop(replay);
 }
+
+/// `sim --record` of a geo-referenced scenario (the paper's, given an
+/// origin) has Foxglove's map channels: once a second each vessel's
+/// `foxglove.LocationFix`, where geographiclib places its true position
+/// (to the plane's s³/6R², far below a millimetre here), and the cells and
+/// vessels as `foxglove.GeoJSON`.
+#[test]
+fn a_geo_referenced_simulation_records_the_map_channels() {
+    use seacover::recorder::messages::{GeoJson, LocationFix, SimVesselRecord};
+    let dir = tempfile::tempdir().unwrap();
+    let origin = (59.91, 10.75);
+    let mut scenario: Value = serde_json::from_str(seacover::sim::PAPER_SCENARIO).unwrap();
+    scenario["origin"] = json!({"lat": origin.0, "lon": origin.1});
+    let path = dir.path().join("paper-oslo.json");
+    std::fs::write(&path, scenario.to_string()).unwrap();
+    let file = dir.path().join("geo.mcap");
+    let ok = Command::new(BIN)
+        .args(["sim", "--duration", "3", "--no-figures", "--scenario"])
+        .arg(&path)
+        .arg("--out")
+        .arg(dir.path().join("out"))
+        .arg("--record")
+        .arg(&file)
+        .stdout(Stdio::null())
+        .status()
+        .unwrap()
+        .success();
+    assert!(ok);
+    let recording = Recording::open(&file).unwrap();
+    let ours = counts(&recording);
+    // Seconds 0, 1, 2 and 3 of a 3 s run.
+    assert_eq!(ours[messages::MAP_CELLS], 4, "{ours:?}");
+    let truth: Vec<SimVesselRecord> = recording
+        .messages(&|t| t == messages::SIM_VESSEL)
+        .map(|m| serde_json::from_slice(&m.unwrap().data).unwrap())
+        .collect();
+    let mut fixes = 0;
+    for m in recording.messages(&|t| t.starts_with(messages::MAP_FIX_PREFIX)) {
+        let m = m.unwrap();
+        let fix: LocationFix = serde_json::from_slice(&m.data).unwrap();
+        let at = m.log_time as f64 / 1e9;
+        let t = truth
+            .iter()
+            .find(|r| r.vessel == fix.frame_id && (r.time - at).abs() < 1e-9)
+            .unwrap_or_else(|| panic!("no truth of {} at {at}", fix.frame_id));
+        let (lat, lon) = common::geo::place(origin, t.truth[0], t.truth[1]);
+        let (dx, dy) = common::geo::locate((lat, lon), fix.latitude, fix.longitude);
+        assert!(dx.hypot(dy) < 1e-3, "{}: {dx} {dy}", fix.frame_id);
+        fixes += 1;
+    }
+    assert_eq!(fixes, 8 * 4);
+    let cells = recording
+        .messages(&|t| t == messages::MAP_CELLS)
+        .next()
+        .unwrap()
+        .unwrap();
+    let cells: GeoJson = serde_json::from_slice(&cells.data).unwrap();
+    let cells: Value = serde_json::from_str(&cells.geojson).unwrap();
+    let kinds = |kind: &str| {
+        cells["features"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|f| f["properties"]["kind"] == kind)
+            .count()
+    };
+    assert_eq!((kinds("cell"), kinds("vessel")), (8, 8), "{cells}");
+}

@@ -56,7 +56,8 @@ pub fn record(
         o.id.get_or_insert_with(|| format!("object-{}", i + 1));
     }
     let mission = MissionDocument {
-        origin: None,
+        // A geo-referenced scenario gives Foxglove's map channels too.
+        origin: doc.origin,
         region: doc
             .region
             .clone()
