@@ -565,19 +565,7 @@ fn a_geo_referenced_simulation_records_the_map_channels() {
     scenario["origin"] = json!({"lat": origin.0, "lon": origin.1});
     let path = dir.path().join("paper-oslo.json");
     std::fs::write(&path, scenario.to_string()).unwrap();
-    let file = dir.path().join("geo.mcap");
-    let ok = Command::new(BIN)
-        .args(["sim", "--duration", "3", "--no-figures", "--scenario"])
-        .arg(&path)
-        .arg("--out")
-        .arg(dir.path().join("out"))
-        .arg("--record")
-        .arg(&file)
-        .stdout(Stdio::null())
-        .status()
-        .unwrap()
-        .success();
-    assert!(ok);
+    let file = common::server::record_scenario(dir.path(), "geo", &path, 3.0);
     let recording = Recording::open(&file).unwrap();
     let ours = counts(&recording);
     // Seconds 0, 1, 2 and 3 of a 3 s run.

@@ -69,16 +69,17 @@ where
 /// `seacover sim` of the paper's scenario for 6 s, recorded: its figures
 /// and CSV in `dir/name`, the recording `dir/name.mcap`, which it returns.
 pub fn record_sim(dir: &Path, name: &str) -> PathBuf {
+    record_scenario(dir, name, Path::new("paper"), 6.0)
+}
+
+/// `seacover sim --scenario SCENARIO` (built-in name or file) for
+/// `seconds`, recorded as [`record_sim`] does.
+pub fn record_scenario(dir: &Path, name: &str, scenario: &Path, seconds: f64) -> PathBuf {
     let file = dir.join(format!("{name}.mcap"));
     let ok = Command::new(env!("CARGO_BIN_EXE_seacover"))
-        .args([
-            "sim",
-            "--scenario",
-            "paper",
-            "--duration",
-            "6",
-            "--no-figures",
-        ])
+        .args(["sim", "--no-figures", "--duration", &seconds.to_string()])
+        .arg("--scenario")
+        .arg(scenario)
         .arg("--out")
         .arg(dir.join(name))
         .arg("--record")
