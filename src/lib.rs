@@ -10,6 +10,8 @@
 //!   types and an evaluation back into its document;
 //! - [`georef`]: WGS84 documents (GeoJSON, lat/lon) in and GeoJSON out,
 //!   through the mission's local plane;
+//! - [`demo`]: `seacover demo`, the coordinator and eight simulated vessels
+//!   on loopback in one process;
 //! - [`load`]: `seacover bench load`, a load benchmark of a running coordinator;
 //! - [`recorder`]: every run recorded as MCAP on a thread of its own, and
 //!   read back (replay, `seacover record`).
@@ -17,6 +19,7 @@
 pub mod agent;
 pub mod control;
 pub mod coverage;
+pub mod demo;
 pub mod geometry;
 pub mod georef;
 pub mod load;

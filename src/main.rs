@@ -694,37 +694,12 @@ async fn demo(
     token: Option<String>,
     record: Option<PathBuf>,
 ) -> anyhow::Result<()> {
-    use seacover::agent::{AgentConfig, paper_vessels, run_fleet};
-    use seacover::control::model::VesselParams;
     check_warp(time_warp)?;
     let (listener, stop) = listen(bind).await?;
     let addr = listener.local_addr()?;
     let recording = record.as_ref().map(|dir| dir.display().to_string());
-    let config = seacover::server::ServeConfig {
-        time_warp,
-        token: token.clone(),
-        record: record.map(|dir| seacover::recorder::RecorderConfig {
-            target: seacover::recorder::Target::Directory {
-                dir,
-                max_bytes: 256 * 1024 * 1024,
-                max_duration: std::time::Duration::from_secs(3600),
-            },
-            wall_clock: true,
-        }),
-        ..Default::default()
-    };
-    let server = tokio::spawn(seacover::server::serve(listener, config, stop.clone()));
-    let agents = AgentConfig {
-        url: format!("ws://{addr}/api/v1/vessels/link"),
-        time_warp,
-        pose_hz: 20.0,
-        seed: 1,
-        token,
-    };
-    let fleet = tokio::spawn(run_fleet(
-        agents,
-        paper_vessels(VesselParams::PAPER),
-        stop.clone(),
+    let run = tokio::spawn(seacover::demo::run(
+        listener, time_warp, token, record, stop,
     ));
     println!("seacover demo: coordinator with 8 vessels (usv-1 … usv-8), mission in memory");
     println!("  dashboard: http://{addr}/");
@@ -733,8 +708,7 @@ async fn demo(
         println!("  recording: {dir}/ (MCAP; `seacover replay FILE` plays it back)");
     }
     println!("  stop with ctrl-c");
-    fleet.await?;
-    server.await??;
+    run.await??;
     Ok(())
 }
 

@@ -571,6 +571,24 @@ pub struct GuidanceDocument {
     pub max_speed: f64,
     pub max_yaw_rate: f64,
     pub filter_time: f64,
+    /// Largest rate of change of the `course` mode's yaw-rate command
+    /// [rad/s²]; 0.5 when absent.
+    #[serde(default = "default_yaw_accel")]
+    #[schema(default = default_yaw_accel)]
+    pub yaw_accel: f64,
+    /// Largest rate of change of the `course` mode's surge command beyond
+    /// what the turning bow asks for [m/s²]; 0.5 when absent.
+    #[serde(default = "default_surge_accel")]
+    #[schema(default = default_surge_accel)]
+    pub surge_accel: f64,
+}
+
+fn default_yaw_accel() -> f64 {
+    crate::control::guidance::GuidanceGains::default().yaw_accel
+}
+
+fn default_surge_accel() -> f64 {
+    crate::control::guidance::GuidanceGains::default().surge_accel
 }
 
 /// One vessel as the coordinator sees it.

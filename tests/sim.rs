@@ -85,7 +85,7 @@ fn writes_csv_summary_and_figures() {
     let mut lines = csv.lines();
     assert_eq!(
         lines.next().unwrap(),
-        "t,vessel,x,y,psi,u,v,r,u_d,r_d,E,psi_e,tau_ud,tau_vd,tau_rd,tau_ud_hat,tau_vd_hat,tau_rd_hat,H"
+        "t,vessel,x,y,psi,u,v,r,u_d,r_d,u_ref,r_ref,u_e_peak,r_e_peak,E,psi_e,tau_ud,tau_vd,tau_rd,tau_ud_hat,tau_vd_hat,tau_rd_hat,H"
     );
     // 10 Hz ticks from 0 to 12 s inclusive, 8 vessels.
     assert_eq!(lines.count(), 121 * 8);

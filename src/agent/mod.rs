@@ -3,8 +3,14 @@
 //! Each vessel is one task with its own WebSocket link. On board it runs the
 //! dynamics (RK4, 1 ms), the disturbance, the observer and the controller in
 //! simulated time locked to the (warped) wall clock, reports its pose at
-//! 20 Hz, and tracks the newest command, extrapolated with its rates; when
-//! that command is more than 1 s old it holds station (u_d = r_d = 0).
+//! 20 Hz, and tracks the newest command: a line along its rates from the
+//! instant it arrived, given to the controller through the on-board
+//! governor ([`reference`](crate::control::reference)), exactly as in
+//! `seacover sim`; when that command is more than 1 s old it holds station
+//! (u_d = r_d = 0). Each pose's telemetry reports the largest tracking
+//! error |u − u_ref|, |r − r_ref| and command lag |c − ref| at any 1 ms step
+//! since the previous pose (`tracking_error`, `command_lag`, each `{u, r}`),
+//! so a recording shows how well the hull followed its commands.
 //! A lost link is retried with exponential backoff and jitter ([`link`]);
 //! the vessel keeps moving meanwhile, as a real one would.
 //!
@@ -24,10 +30,11 @@ use tokio_util::sync::CancellationToken;
 use link::LinkConfig;
 
 use crate::control::Vec3;
-use crate::control::controller::{ControllerGains, Reference, control};
+use crate::control::controller::{ControllerGains, control};
 use crate::control::disturbance::Disturbance;
 use crate::control::model::{State, VesselParams, step};
 use crate::control::observer::{Observer, ObserverGains};
+use crate::control::reference::{Governor, Line};
 use crate::protocol::{CommandDocument, PoseDocument};
 
 /// One simulated vessel's settings.
@@ -108,6 +115,12 @@ struct Onboard {
     t: f64,
     /// The newest command and the on-board time it arrived.
     command: Option<(CommandDocument, f64)>,
+    governor: Governor,
+    /// Largest |u − u_ref|, |r − r_ref| since the previous pose.
+    peak_error: (f64, f64),
+    /// Largest |c − ref| (command line against the governor's reference)
+    /// since the previous pose.
+    peak_lag: (f64, f64),
 }
 
 impl Onboard {
@@ -120,6 +133,9 @@ impl Onboard {
             disturbance: Disturbance::Paper { index: v.index },
             t: 0.0,
             command: None,
+            governor: Governor::new(v.params, v.start.vel),
+            peak_error: (0.0, 0.0),
+            peak_lag: (0.0, 0.0),
         }
     }
 
@@ -128,27 +144,32 @@ impl Onboard {
         let h = 1e-3;
         let steps = (seconds / h).round() as usize;
         for _ in 0..steps {
-            let reference = match &self.command {
-                Some((c, at)) if self.t - at <= 1.0 => {
-                    let since = self.t - at;
-                    Reference {
-                        u_d: c.u_d + c.u_d_dot * since,
-                        r_d: c.r_d + c.r_d_dot * since,
-                        u_d_dot: c.u_d_dot,
-                        r_d_dot: c.r_d_dot,
-                    }
+            let line = match &self.command {
+                Some((c, at)) if self.t - at <= 1.0 => Line {
+                    u_d: c.u_d,
+                    r_d: c.r_d,
+                    u_d_dot: c.u_d_dot,
+                    r_d_dot: c.r_d_dot,
                 }
+                .at(self.t - at),
                 // No command, or a stale one: hold station.
-                _ => Reference::default(),
+                _ => Line::HOLD.at(0.0),
             };
             self.observer.measure(self.state.vel, h);
-            let (tu, tr) = control(
-                &self.params,
-                &self.controller,
-                self.state.vel,
-                &reference,
-                self.observer.estimate(),
+            let (vel, est) = (self.state.vel, self.observer.estimate());
+            let reference = self.governor.step(&line, vel, est, h);
+            let max = |peak: &mut (f64, f64), e: (f64, f64)| {
+                *peak = (peak.0.max(e.0.abs()), peak.1.max(e.1.abs()));
+            };
+            max(
+                &mut self.peak_error,
+                (vel.x - reference.u_d, vel.z - reference.r_d),
             );
+            max(
+                &mut self.peak_lag,
+                (line.u_d - reference.u_d, line.r_d - reference.r_d),
+            );
+            let (tu, tr) = control(&self.params, &self.controller, vel, &reference, est);
             let d = &self.disturbance;
             let (next, applied) = step(&self.params, &self.state, tu, tr, self.t, h, |t, s| {
                 d.value(t, s.psi)
@@ -164,7 +185,14 @@ impl Onboard {
     /// forces to four decimals. Finer than any GNSS/INS, and it keeps the
     /// 17-digit noise of a double out of the wire and of every recording
     /// (it was most of an 8-vessel recording's size).
-    fn pose(&self) -> PoseDocument {
+    /// Also starts the next interval of `tracking_error` and `command_lag`.
+    fn pose(&mut self) -> PoseDocument {
+        let (error, lag) = (
+            std::mem::take(&mut self.peak_error),
+            std::mem::take(&mut self.peak_lag),
+        );
+        let pair =
+            |(u, r): (f64, f64)| serde_json::json!({"u": decimals(u, 5), "r": decimals(r, 5)});
         let tau = self.disturbance.value(self.t, self.state.psi);
         let est = self.observer.estimate();
         let s = &self.state;
@@ -182,6 +210,8 @@ impl Onboard {
             telemetry: Some(serde_json::json!({
                 "tau_d": tau_d,
                 "tau_d_hat": tau_d_hat,
+                "tracking_error": pair(error),
+                "command_lag": pair(lag),
             })),
         }
     }

@@ -18,8 +18,8 @@
 //! measures it). This mode treats the velocity over ground w as the thing to
 //! control:
 //! - desired ground velocity w_d = S(E) ê with the paper's speed profile
-//!   S(E) = k_u1 (σ(b₂ E) − ½) + k_u2 E, capped at `max_speed`, and 0 inside
-//!   `arrival_radius`;
+//!   S(E) = k_u1 (σ(b₂ E) − ½) + k_u2 E, capped at `max_speed` and faded
+//!   to 0 smoothly (C¹) inside `arrival_radius`, so arriving is no switch;
 //! - the bow is steered along Δw + ¼ w_d, i.e. mostly along the velocity
 //!   error Δw = w_d − w and along w_d once that error is small (or against
 //!   it, with hysteresis, so braking may use astern thrust), with the paper's
@@ -40,9 +40,36 @@
 //! Once the bow lies along Δw, changing u changes w exactly along Δw, so the
 //! error shrinks without ever needing the weakly damped sway to die out.
 //! Same vessel, same disturbances, same observer and controller.
+//!
+//! ## Commands a hull can follow (`course`)
+//! A command is a line in time: its value at the tick and its rates, which
+//! the vessel follows until the next command arrives. The law's raw output
+//! jumps (the heading error swings as Δw shrinks, the astern choice flips,
+//! the yaw command fades out near the goal) and a held value is a step at
+//! every tick; a step in r_d asks for an infinite yaw moment. So the
+//! `course` mode sends, instead of the raw output, a line that
+//! - starts where the previous command's line has got to (or, for a vessel
+//!   without one, at its own velocity): the command is continuous in time;
+//! - heads for the raw output by the next tick, with ṙ_d bounded by
+//!   `yaw_accel` and u̇_d by `surge_accel` (the raw u̇_d of the turning bow
+//!   fed forward), as ArduPilot bounds its steering and speed targets;
+//! - never leaves ±`max_yaw_rate` nor the safety filter's surge interval:
+//!   that bound is a constraint, and where it moves past the line the line
+//!   jumps to it (the filter's intervention, the one step left).
+//! The cost is one tick of delay on the raw law, which the coverage figures
+//! do not notice (`docs/reproducing-the-paper.md`).
 
 use super::model::State;
 use super::{sigmoid, wrap};
+
+/// 3x² − 2x³ on [0, 1], 0 below and 1 above: a C¹ switch.
+fn smoothstep(x: f64) -> f64 {
+    let x = x.clamp(0.0, 1.0);
+    x * x * (3.0 - 2.0 * x)
+}
+
+/// No bound on the surge command.
+pub const UNBOUNDED: (f64, f64) = (f64::NEG_INFINITY, f64::INFINITY);
 
 /// Which guidance law.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -88,6 +115,14 @@ pub struct GuidanceGains {
     pub max_yaw_rate: f64,
     /// Time constant of the filters on ψ̇_r, Ċ, u̇_d, ṙ_d [s].
     pub filter_time: f64,
+    /// Largest rate of change of the `course` mode's yaw-rate command
+    /// [rad/s²]: keep it within what the hull's yaw moment can give (the
+    /// paper's vessel: 1 rad/s²), like ArduPilot's `ATC_STR_ACC_MAX`.
+    pub yaw_accel: f64,
+    /// Largest rate of change of the `course` mode's surge command [m/s²]
+    /// beyond the rate the turning bow itself asks for (the paper's vessel:
+    /// 1 m/s²), like ArduPilot's `ATC_ACCEL_MAX`.
+    pub surge_accel: f64,
 }
 
 impl Default for GuidanceGains {
@@ -104,6 +139,8 @@ impl Default for GuidanceGains {
             max_speed: 2.0,
             max_yaw_rate: 1.0,
             filter_time: 0.5,
+            yaw_accel: 0.5,
+            surge_accel: 0.75,
         }
     }
 }
@@ -119,6 +156,9 @@ pub struct Command {
     pub e: f64,
     /// The heading error the yaw law acts on.
     pub psi_e: f64,
+    /// How much the surge bound given to [`Guidance::track`] cut the
+    /// command [m/s] (0 when it did not).
+    pub surge_cut: f64,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -130,6 +170,25 @@ struct Last {
     r_d: f64,
 }
 
+/// The `course` mode's command in force: its value at `t` and its rates,
+/// the line the vessel follows until the next command.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Line {
+    t: f64,
+    u: f64,
+    r: f64,
+    u_dot: f64,
+    r_dot: f64,
+}
+
+/// A line older than this [s] is not continued: the vessel was gone or
+/// its commands stopped, and its own velocity is the better start.
+const LINE_GAP: f64 = 1.0;
+
+/// The command period assumed before two commands have given it [s]
+/// (SPEC's tick).
+const FIRST_PERIOD: f64 = 0.1;
+
 /// Guidance state of one vessel (the filters need history).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Guidance {
@@ -139,6 +198,8 @@ pub struct Guidance {
     c_dot: (f64, f64),
     u_d_dot: f64,
     r_d_dot: f64,
+    /// The `course` mode's command line in force.
+    line: Option<Line>,
     /// Whether the `course` mode is thrusting astern.
     astern: bool,
     /// The vessel cannot thrust astern: the `course` mode turns it round
@@ -160,6 +221,7 @@ impl Guidance {
             c_dot: (0.0, 0.0),
             u_d_dot: 0.0,
             r_d_dot: 0.0,
+            line: None,
             astern: false,
             ahead_only: false,
         }
@@ -169,13 +231,13 @@ impl Guidance {
     /// is `centroid`.
     pub fn update(&mut self, t: f64, state: &State, centroid: (f64, f64)) -> Command {
         let e = (centroid.0 - state.x).hypot(centroid.1 - state.y);
-        self.steer(t, state, centroid, e, None)
+        self.steer(t, state, centroid, e, None, UNBOUNDED)
     }
 
     /// The `course` mode's desired ground velocity towards `towards` with
     /// `remaining` metres still to go (a route may bend, so that can exceed
     /// the straight distance): w_d = S(remaining) along the line of sight,
-    /// 0 inside the arrival radius. The safety filter starts from this.
+    /// faded to 0 inside the arrival radius. The safety filter starts from this.
     pub fn desired_velocity(
         &self,
         state: &State,
@@ -185,11 +247,16 @@ impl Guidance {
         let g = self.gains;
         let (ex, ey) = (towards.0 - state.x, towards.1 - state.y);
         let sight = ex.hypot(ey);
-        let s = if remaining < g.arrival_radius {
-            0.0
+        // Inside the arrival radius the speed fades to zero smoothly (C¹)
+        // instead of switching off, so that a vessel crossing it is asked
+        // for no step (S(E) itself already vanishes with E).
+        let arrive = if g.arrival_radius > 0.0 {
+            smoothstep(remaining / g.arrival_radius)
         } else {
-            (g.k_u1 * (sigmoid(g.b2 * remaining) - 0.5) + g.k_u2 * remaining).min(g.max_speed)
+            1.0
         };
+        let s = (g.k_u1 * (sigmoid(g.b2 * remaining) - 0.5) + g.k_u2 * remaining).min(g.max_speed)
+            * arrive;
         if sight > 0.0 {
             (s * ex / sight, s * ey / sight)
         } else {
@@ -202,8 +269,10 @@ impl Guidance {
     /// `w_d` instead of its own desired one (the safety filter's output).
     /// With `towards` the centroid, `remaining` its distance and `w_d` from
     /// [`desired_velocity`](Self::desired_velocity), this is exactly
-    /// [`update`](Self::update). The `paper` mode ignores `w_d`: the literal
-    /// law steers the bow, not a ground velocity.
+    /// [`update`](Self::update). `surge` bounds u_d (the safety filter's
+    /// barrier; [`UNBOUNDED`] for none): the command line never leaves it,
+    /// even where that costs a step. The `paper` mode ignores `w_d` and
+    /// `surge`: the literal law steers the bow, not a ground velocity.
     pub fn track(
         &mut self,
         t: f64,
@@ -211,8 +280,64 @@ impl Guidance {
         towards: (f64, f64),
         remaining: f64,
         w_d: (f64, f64),
+        surge: (f64, f64),
     ) -> Command {
-        self.steer(t, state, towards, remaining, Some(w_d))
+        self.steer(t, state, towards, remaining, Some(w_d), surge)
+    }
+
+    /// The `course` mode's command line from `t` on, given the law's raw
+    /// output (u, r, u̇ when it has one) and the surge bound: continuous in
+    /// time and with bounded rates (see the module doc). Returns (u_d, r_d,
+    /// u̇_d, ṙ_d, how much the bound cut the command).
+    fn shape(
+        &mut self,
+        t: f64,
+        state: &State,
+        raw: (f64, f64, f64),
+        surge: (f64, f64),
+    ) -> (f64, f64, f64, f64, f64) {
+        let g = self.gains;
+        let (lo, hi) = if self.ahead_only {
+            (surge.0.max(0.0), surge.1.max(0.0))
+        } else {
+            surge
+        };
+        let (raw_u, raw_r, raw_u_dot) = raw;
+        let bounded_u = raw_u.max(lo).min(hi);
+        // Where the line in force has got to; a vessel without one starts
+        // from its own velocity, so its first command is no step either.
+        let (u0, r0, period) = match self.line {
+            Some(l) if t >= l.t && t - l.t <= LINE_GAP => {
+                let since = t - l.t;
+                let period = if since > 0.0 { since } else { FIRST_PERIOD };
+                (l.u + l.u_dot * since, l.r + l.r_dot * since, period)
+            }
+            _ => (state.vel.x, state.vel.z, FIRST_PERIOD),
+        };
+        // The bound is a safety constraint: it wins over continuity.
+        let u = u0.max(lo).min(hi);
+        let r = r0.clamp(-g.max_yaw_rate, g.max_yaw_rate);
+        let cut = (bounded_u - raw_u).abs().max((u - u0).abs());
+        // Reach the law's output by the next command if the rate bounds
+        // allow (u's own rate fed forward), never leaving the bounds.
+        let u_dot = (raw_u_dot + (bounded_u - u) / period)
+            .clamp(-g.surge_accel, g.surge_accel)
+            .max((lo - u) / period)
+            .min((hi - u) / period);
+        let r_dot = ((raw_r - r) / period)
+            .clamp(-g.yaw_accel, g.yaw_accel)
+            .clamp(
+                (-g.max_yaw_rate - r) / period,
+                (g.max_yaw_rate - r) / period,
+            );
+        self.line = Some(Line {
+            t,
+            u,
+            r,
+            u_dot,
+            r_dot,
+        });
+        (u, r, u_dot, r_dot, cut)
     }
 
     fn steer(
@@ -222,6 +347,7 @@ impl Guidance {
         centroid: (f64, f64),
         e: f64,
         w_d: Option<(f64, f64)>,
+        surge: (f64, f64),
     ) -> Command {
         let g = self.gains;
         let (ex, ey) = (centroid.0 - state.x, centroid.1 - state.y);
@@ -319,17 +445,29 @@ impl Guidance {
             u_d,
             r_d,
         });
-        Command {
-            u_d,
-            r_d,
-            u_d_dot: exact_u_d_dot.unwrap_or(self.u_d_dot),
-            r_d_dot: if exact_u_d_dot.is_some() {
-                0.0
-            } else {
-                self.r_d_dot
+        match (g.mode, exact_u_d_dot) {
+            (GuidanceMode::Course, Some(u_dot)) => {
+                let (u_d, r_d, u_d_dot, r_d_dot, surge_cut) =
+                    self.shape(t, state, (u_d, r_d, u_dot), surge);
+                Command {
+                    u_d,
+                    r_d,
+                    u_d_dot,
+                    r_d_dot,
+                    e,
+                    psi_e,
+                    surge_cut,
+                }
+            }
+            _ => Command {
+                u_d,
+                r_d,
+                u_d_dot: self.u_d_dot,
+                r_d_dot: self.r_d_dot,
+                e,
+                psi_e,
+                surge_cut: 0.0,
             },
-            e,
-            psi_e,
         }
     }
 }
@@ -361,6 +499,14 @@ mod tests {
         assert_eq!((stop.u_d, stop.r_d), (0.0, 0.0));
     }
 
+    /// `n` commands 0.1 s apart for a vessel held in `state`, the last one.
+    fn settle(g: &mut Guidance, t0: f64, n: usize, state: &State, goal: (f64, f64)) -> Command {
+        (0..n)
+            .map(|k| g.update(t0 + 0.1 * k as f64, state, goal))
+            .last()
+            .unwrap()
+    }
+
     #[test]
     fn course_mode_turns_towards_the_velocity_error_and_brakes() {
         let mut g = Guidance::new(GuidanceGains::default());
@@ -373,19 +519,78 @@ mod tests {
         };
         let c = g.update(0.0, &s, (10.0, 0.0));
         // w_d = (S, 0); Δw = (S, −1): the bow must turn to starboard (ψ_e < 0).
-        assert!(c.psi_e < 0.0 && c.r_d < 0.0);
-        assert!(c.u_d > 0.0);
+        // The first command starts at the hull's own velocity and heads there.
+        assert!(c.psi_e < 0.0 && c.r_d == 0.0 && c.r_d_dot < 0.0, "{c:?}");
+        assert!(c.u_d == 0.0 && c.u_d_dot > 0.0, "{c:?}");
+        let c = settle(&mut g, 0.1, 10, &s, (10.0, 0.0));
+        assert!(c.r_d < 0.0 && c.u_d > 0.0, "{c:?}");
         // Goal behind: surge is asked to go astern, not to turn round first.
-        let back = g.update(
-            0.1,
+        let back = settle(
+            &mut g,
+            2.0,
+            30,
             &State {
                 vel: Vec3::zeros(),
                 ..s
             },
             (-10.0, 0.0),
         );
-        assert!(back.u_d < 0.0);
+        assert!(back.u_d < 0.0, "{back:?}");
         assert!(back.psi_e.abs() < 1e-12);
+    }
+
+    #[test]
+    fn course_commands_are_continuous_lines_with_bounded_rates() {
+        let gains = GuidanceGains::default();
+        let mut g = Guidance::new(gains);
+        let mut last: Option<(f64, Command)> = None;
+        // A vessel swinging about while its goal jumps round it: the raw law
+        // jumps (astern flips, heading error swings); the commands may not.
+        for k in 0..400 {
+            let t = 0.1 * k as f64;
+            let a = 0.37 * k as f64;
+            let s = State {
+                x: a.sin(),
+                y: (1.3 * a).cos(),
+                psi: 2.0 * (0.5 * a).sin(),
+                vel: Vec3::new(1.5 * (0.7 * a).cos(), 0.3 * a.sin(), 0.8 * (1.1 * a).sin()),
+            };
+            let goal = if (k / 25) % 2 == 0 {
+                (20.0, 5.0)
+            } else {
+                (-15.0, -8.0)
+            };
+            let bound = if (k / 40) % 3 == 2 {
+                (-0.2, 0.4)
+            } else {
+                UNBOUNDED
+            };
+            let c = g.track(t, &s, goal, 20.0, g.desired_velocity(&s, goal, 20.0), bound);
+            assert!(c.r_d.abs() <= gains.max_yaw_rate + 1e-12, "{c:?}");
+            assert!(c.r_d_dot.abs() <= gains.yaw_accel + 1e-12, "{c:?}");
+            assert!(c.u_d_dot.abs() <= gains.surge_accel + 1e-12, "{c:?}");
+            assert!((bound.0..=bound.1).contains(&c.u_d), "{c:?}");
+            if let Some((t0, p)) = last {
+                // Where the previous line got to, except where the surge
+                // bound moved past it.
+                assert!((c.r_d - (p.r_d + p.r_d_dot * (t - t0))).abs() < 1e-12);
+                let u = p.u_d + p.u_d_dot * (t - t0);
+                assert!(
+                    (c.u_d - u).abs() < 1e-12 || c.surge_cut > 0.0,
+                    "{c:?} {p:?}"
+                );
+            }
+            last = Some((t, c));
+        }
+        // A command after a gap starts afresh, from the vessel's velocity.
+        let s = State {
+            x: 0.0,
+            y: 0.0,
+            psi: 0.0,
+            vel: Vec3::new(0.3, 0.0, -0.2),
+        };
+        let c = g.update(100.0, &s, (5.0, 5.0));
+        assert_eq!((c.u_d, c.r_d), (0.3, -0.2));
     }
 
     #[test]
@@ -403,14 +608,15 @@ mod tests {
         for k in 0..20 {
             let c = g.update(0.1 * k as f64, &s, (-10.0, 1.0));
             assert!(c.u_d >= 0.0, "{c:?}");
-            assert!(c.r_d > 0.0 && c.psi_e > 1.9, "{c:?}");
+            assert!(c.r_d_dot > 0.0 && c.psi_e > 1.9, "{c:?}");
+            assert!(k == 0 || c.r_d > 0.0, "{c:?}");
         }
         // Moving ahead at 1 m/s, goal behind: no astern thrust to brake.
         let moving = State {
             vel: Vec3::new(1.0, 0.0, 0.0),
             ..s
         };
-        let c = g.update(3.0, &moving, (-10.0, 1.0));
+        let c = settle(&mut g, 2.0, 10, &moving, (-10.0, 1.0));
         assert!(c.u_d >= 0.0 && c.r_d > 0.0, "{c:?}");
     }
 }

@@ -22,6 +22,7 @@ pub mod lloyd;
 pub mod model;
 pub mod ned;
 pub mod observer;
+pub mod reference;
 pub mod safety;
 
 use std::f64::consts::PI;

@@ -299,7 +299,14 @@ impl SafetyLayer {
         let nominal = Point { x: wx, y: wy };
         let to = (towards.x, towards.y);
         if guidance.gains.mode == GuidanceMode::Paper {
-            let command = guidance.track(tick.t, s, to, remaining, (nominal.x, nominal.y));
+            let command = guidance.track(
+                tick.t,
+                s,
+                to,
+                remaining,
+                (nominal.x, nominal.y),
+                super::guidance::UNBOUNDED,
+            );
             return SafeCommand {
                 command,
                 goal,
@@ -316,22 +323,17 @@ impl SafetyLayer {
                 surge: (f64::NEG_INFINITY, f64::INFINITY),
             },
         };
-        let mut command = guidance.track(tick.t, s, to, remaining, (w.x, w.y));
         // The thrust is along the bow: ask only for the surge that
         // keeps every gap while the hull turns (see `barrier`).
-        let u_d = command.u_d.clamp(surge.0, surge.1);
-        let clamped = (u_d - command.u_d).abs() > self.params.tolerance;
-        if u_d != command.u_d {
-            command.u_d = u_d;
-            command.u_d_dot = 0.0;
-        }
+        let command = guidance.track(tick.t, s, to, remaining, (w.x, w.y), surge);
         SafeCommand {
             command,
             goal,
             towards,
             nominal,
             filtered: w,
-            intervened: clamped || norm2(w - nominal).sqrt() > self.params.tolerance,
+            intervened: command.surge_cut > self.params.tolerance
+                || norm2(w - nominal).sqrt() > self.params.tolerance,
         }
     }
 }

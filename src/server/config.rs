@@ -95,6 +95,8 @@ pub struct GuidanceSection {
     pub max_speed: Option<f64>,
     pub max_yaw_rate: Option<f64>,
     pub filter_time: Option<f64>,
+    pub yaw_accel: Option<f64>,
+    pub surge_accel: Option<f64>,
 }
 
 /// What a configuration file settles.
@@ -192,6 +194,8 @@ impl Settings {
             (&mut d.max_speed, g.max_speed),
             (&mut d.max_yaw_rate, g.max_yaw_rate),
             (&mut d.filter_time, g.filter_time),
+            (&mut d.yaw_accel, g.yaw_accel),
+            (&mut d.surge_accel, g.surge_accel),
         ] {
             if let Some(v) = value {
                 *slot = v;

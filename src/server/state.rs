@@ -395,6 +395,8 @@ pub fn guidance_document(g: &GuidanceGains) -> GuidanceDocument {
         max_speed: g.max_speed,
         max_yaw_rate: g.max_yaw_rate,
         filter_time: g.filter_time,
+        yaw_accel: g.yaw_accel,
+        surge_accel: g.surge_accel,
     }
 }
 
@@ -424,6 +426,8 @@ pub fn guidance_gains(doc: &GuidanceDocument) -> Result<GuidanceGains, ApiError>
         ("max_speed", doc.max_speed),
         ("max_yaw_rate", doc.max_yaw_rate),
         ("filter_time", doc.filter_time),
+        ("yaw_accel", doc.yaw_accel),
+        ("surge_accel", doc.surge_accel),
     ];
     for (name, value) in gains {
         if !(value.is_finite() && value > 0.0) {
@@ -449,6 +453,8 @@ pub fn guidance_gains(doc: &GuidanceDocument) -> Result<GuidanceGains, ApiError>
         max_speed: doc.max_speed,
         max_yaw_rate: doc.max_yaw_rate,
         filter_time: doc.filter_time,
+        yaw_accel: doc.yaw_accel,
+        surge_accel: doc.surge_accel,
     })
 }
 

@@ -132,6 +132,8 @@ fn panel<DB: DrawingBackend>(
         (lo, hi) = (-1.0, 1.0);
     }
     let pad = ((hi - lo) * 0.05).max(1e-6);
+    // Enough decimals that neighbouring ticks differ (about ten of them).
+    let decimals = (-((hi - lo + 2.0 * pad) / 10.0).log10().floor()).clamp(0.0, 12.0) as usize;
     let mut chart = ChartBuilder::on(area)
         .caption(title, ("sans-serif", 22))
         .margin(12)
@@ -143,6 +145,7 @@ fn panel<DB: DrawingBackend>(
         .configure_mesh()
         .x_desc("t (s)")
         .y_desc(y_label)
+        .y_label_formatter(&|v| format!("{v:.decimals$}"))
         .label_style(("sans-serif", 14))
         .draw()
         .map_err(err)?;
@@ -218,8 +221,8 @@ fn tracking<DB: DrawingBackend>(
     let cells = root.split_evenly((2, 2));
     let psi = per_vessel(config, run, |_, v| v.command.psi_e);
     let dist = per_vessel(config, run, |_, v| v.command.e);
-    let ue = per_vessel(config, run, |_, v| v.state.vel.x - v.command.u_d);
-    let re = per_vessel(config, run, |_, v| v.state.vel.z - v.command.r_d);
+    let ue = per_vessel(config, run, |_, v| v.peak_error.0);
+    let re = per_vessel(config, run, |_, v| v.peak_error.1);
     let mode = config.guidance.mode.name();
     panel(
         &cells[0],
@@ -239,7 +242,7 @@ fn tracking<DB: DrawingBackend>(
     )?;
     panel(
         &cells[2],
-        "Fig. 2c surge error u − u_d",
+        "Fig. 2c surge error u − u_ref (largest per tick)",
         "u_e (m/s)",
         config.duration,
         &ue,
@@ -247,7 +250,7 @@ fn tracking<DB: DrawingBackend>(
     )?;
     panel(
         &cells[3],
-        "Fig. 2d yaw-rate error r − r_d",
+        "Fig. 2d yaw-rate error r − r_ref (largest per tick)",
         "r_e (rad/s)",
         config.duration,
         &re,

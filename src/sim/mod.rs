@@ -3,8 +3,10 @@
 //!
 //! Dynamics, observer and controller run at the dynamics step (1 kHz by
 //! default); the coverage engine and guidance run at the coordinator's tick
-//! (10 Hz), exactly as the networked system splits them: commands are held
-//! between ticks. Lloyd's single-integrator fleet (paper Fig. 3b) runs from
+//! (10 Hz), exactly as the networked system splits them: between ticks each
+//! vessel follows its command's line (the command and its rates) through
+//! the on-board governor ([`reference`](crate::control::reference)), as
+//! `seacover agent` does. Lloyd's single-integrator fleet (paper Fig. 3b) runs from
 //! the same start on the same ticks.
 //!
 //! Guidance goes through the same [`SafetyLayer`] as the coordinator's tick
@@ -22,11 +24,12 @@ pub mod record;
 pub mod starts;
 pub mod study;
 
-use crate::control::controller::{ControllerGains, Reference, control};
+use crate::control::controller::{ControllerGains, control};
 use crate::control::disturbance::{Disturbance, Gusts};
 use crate::control::guidance::{Command, Guidance, GuidanceGains};
 use crate::control::model::{State, VesselParams, step};
 use crate::control::observer::{Observer, ObserverGains};
+use crate::control::reference::{Governor, Line};
 use crate::control::safety::{SafetyLayer, SafetyParams};
 use crate::control::{Vec3, lloyd};
 use crate::coverage::{CellGeometry, Fleet, Options, Vessel, evaluate};
@@ -126,6 +129,13 @@ pub struct VesselSample {
     pub intervened: bool,
     pub tau_d: Vec3,
     pub estimate: Vec3,
+    /// The reference the controller tracks at this instant (the on-board
+    /// governor's output; see `control::reference`).
+    pub reference: (f64, f64),
+    /// The largest tracking errors (u − u_ref, r − r_ref, signed) at any
+    /// dynamics step since the previous tick: what Fig. 2 plots, so that
+    /// nothing between ticks is hidden.
+    pub peak_error: (f64, f64),
 }
 
 /// The fleet at one tick.
@@ -151,6 +161,11 @@ pub struct Measures {
     pub observer_error_max_after_10s: f64,
     pub u_error_max_after_20s: f64,
     pub r_error_max_after_20s: f64,
+    /// Largest gap after 20 s between the command line and the reference
+    /// the on-board governor gave the controller (what it held back as
+    /// more than the hull could do; see `control::reference`).
+    pub u_lag_max_after_20s: f64,
+    pub r_lag_max_after_20s: f64,
     /// Last time any observer error exceeded 0.05.
     pub t1_observer: f64,
 }
@@ -376,7 +391,12 @@ pub fn run(config: &Config, mut progress: impl FnMut(f64)) -> Result<Run, SimErr
         config.safety.shore_distance,
         1.0 / config.tick_hz,
     );
-    let mut references = vec![Reference::default(); n];
+    let mut lines = vec![Line::HOLD; n];
+    let mut peaks = vec![(0.0, 0.0); n];
+    let mut governors: Vec<Governor> = states
+        .iter()
+        .map(|s| Governor::new(config.vessel, s.vel))
+        .collect();
     let mut commands = vec![Command::default(); n];
     let mut lloyd_positions: Vec<Point> = config
         .scenario
@@ -422,7 +442,7 @@ pub fn run(config: &Config, mut progress: impl FnMut(f64)) -> Result<Run, SimErr
             for i in 0..n {
                 let c = eval.cells[i].centroid;
                 commands[i] = safe[i].command;
-                references[i] = Reference {
+                lines[i] = Line {
                     u_d: commands[i].u_d,
                     r_d: commands[i].r_d,
                     u_d_dot: commands[i].u_d_dot,
@@ -436,6 +456,8 @@ pub fn run(config: &Config, mut progress: impl FnMut(f64)) -> Result<Run, SimErr
                     intervened: safe[i].intervened,
                     tau_d: disturbances[i].value(t, states[i].psi),
                     estimate: observers[i].estimate(),
+                    reference: governors[i].current(),
+                    peak_error: std::mem::take(&mut peaks[i]),
                 });
             }
             if let Some(pos) = pending_snapshots.iter().position(|&ts| ts <= t + 1e-9) {
@@ -479,22 +501,27 @@ pub fn run(config: &Config, mut progress: impl FnMut(f64)) -> Result<Run, SimErr
             if (est - truth).amax() > 0.05 {
                 measures.t1_observer = t;
             }
-            // Between ticks the vessel extrapolates the command with its rates,
-            // as an agent does with u_d_dot and r_d_dot.
+            // Between ticks the command is a line along its rates; the
+            // governor gives the controller what of it the hull can follow.
             let since = (k % per_tick) as f64 * h;
-            let held = &references[i];
-            let reference = Reference {
-                u_d: held.u_d + held.u_d_dot * since,
-                r_d: held.r_d + held.r_d_dot * since,
-                ..*held
-            };
+            let line = lines[i].at(since);
+            let reference = governors[i].step(&line, s.vel, est, h);
+            let error = (s.vel.x - reference.u_d, s.vel.z - reference.r_d);
+            let peak = &mut peaks[i];
+            if error.0.abs() > peak.0.abs() {
+                peak.0 = error.0;
+            }
+            if error.1.abs() > peak.1.abs() {
+                peak.1 = error.1;
+            }
             if t >= 20.0 {
-                measures.u_error_max_after_20s = measures
-                    .u_error_max_after_20s
-                    .max((s.vel.x - reference.u_d).abs());
-                measures.r_error_max_after_20s = measures
-                    .r_error_max_after_20s
-                    .max((s.vel.z - reference.r_d).abs());
+                let m = &mut measures;
+                m.u_error_max_after_20s =
+                    m.u_error_max_after_20s.max((s.vel.x - reference.u_d).abs());
+                m.r_error_max_after_20s =
+                    m.r_error_max_after_20s.max((s.vel.z - reference.r_d).abs());
+                m.u_lag_max_after_20s = m.u_lag_max_after_20s.max((line.u_d - reference.u_d).abs());
+                m.r_lag_max_after_20s = m.r_lag_max_after_20s.max((line.r_d - reference.r_d).abs());
             }
             let (tu, tr) = control(&config.vessel, &config.controller, s.vel, &reference, est);
             let dist = &disturbances[i];

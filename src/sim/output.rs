@@ -23,6 +23,9 @@ pub struct Summary {
     pub e_max_end: f64,
     pub observer_error_max_after_10s: f64,
     pub velocity_error_max_after_20s: VelocityErrors,
+    /// What the on-board governor held back of the commands after 20 s:
+    /// the largest gap between the command line and the reference tracked.
+    pub command_lag_max_after_20s: VelocityErrors,
     #[serde(rename = "T1_observer_s")]
     pub t1_observer_s: f64,
     pub lloyd: LloydSummary,
@@ -63,6 +66,10 @@ impl Summary {
             velocity_error_max_after_20s: VelocityErrors {
                 u: run.measures.u_error_max_after_20s,
                 r: run.measures.r_error_max_after_20s,
+            },
+            command_lag_max_after_20s: VelocityErrors {
+                u: run.measures.u_lag_max_after_20s,
+                r: run.measures.r_lag_max_after_20s,
             },
             t1_observer_s: run.measures.t1_observer,
             lloyd: LloydSummary {
@@ -150,14 +157,14 @@ pub fn write_timeseries(path: &Path, config: &Config, run: &Run) -> std::io::Res
     let mut w = std::io::BufWriter::new(std::fs::File::create(path)?);
     writeln!(
         w,
-        "t,vessel,x,y,psi,u,v,r,u_d,r_d,E,psi_e,tau_ud,tau_vd,tau_rd,tau_ud_hat,tau_vd_hat,tau_rd_hat,H"
+        "t,vessel,x,y,psi,u,v,r,u_d,r_d,u_ref,r_ref,u_e_peak,r_e_peak,E,psi_e,tau_ud,tau_vd,tau_rd,tau_ud_hat,tau_vd_hat,tau_rd_hat,H"
     )?;
     for tick in &run.ticks {
         for (v, id) in tick.vessels.iter().zip(&config.scenario.ids) {
             let s = &v.state;
             writeln!(
                 w,
-                "{:.3},{},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6}",
+                "{:.3},{},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6}",
                 tick.t,
                 id,
                 s.x,
@@ -168,6 +175,10 @@ pub fn write_timeseries(path: &Path, config: &Config, run: &Run) -> std::io::Res
                 s.vel.z,
                 v.command.u_d,
                 v.command.r_d,
+                v.reference.0,
+                v.reference.1,
+                v.peak_error.0,
+                v.peak_error.1,
                 v.command.e,
                 v.command.psi_e,
                 v.tau_d.x,

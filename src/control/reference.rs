@@ -1,0 +1,198 @@
+//! The on-board reference: from the commands a vessel receives, one per
+//! tick, to the signal its controller tracks at every dynamics step.
+//!
+//! A command (u_d, r_d, u̇_d, ṙ_d) arrives every tick (100 ms by default).
+//! Between ticks it defines a line, c(t) = (u_d + u̇_d (t − t_k),
+//! r_d + ṙ_d (t − t_k)); at the next tick the line moves to wherever the
+//! guidance says the hull should be now. Handing those lines to the
+//! controller as they are gives it a step at every tick, which the
+//! finite-time law answers with a moment the actuators may not have
+//! (the paper's vessel has 1 rad/s² of yaw authority; a step in r_d asks for
+//! an infinite one). The error it leaves is not the controller's failing
+//! but the command's.
+//!
+//! [`Governor`] is the reference the controller is given instead: a
+//! first-order follower of the line with the line's own slope fed forward,
+//!
+//! ```text
+//! ẏ = clamp(ċ + ω (c − y), a_lo, a_hi)
+//! ```
+//!
+//! per channel (y = u_ref or r_ref), where [a_lo, a_hi] is the acceleration
+//! the actuators can still give at this instant, after damping, Coriolis
+//! and the observer's disturbance estimate have taken their share and a
+//! quarter of the limit is kept back for the controller's own error
+//! feedback (`MARGIN`). So:
+//! - y is continuous and ẏ bounded: the reference never asks for more than
+//!   the hull can do, and with an exact estimate the controller tracks it
+//!   exactly (paper eq. 37);
+//! - a line followed along its slope is tracked with no lag (the slope is
+//!   fed forward; only its jumps at ticks are smoothed, with time constant
+//!   1/ω);
+//! - what the governor holds back, |y − c|, is measured beside the tracking
+//!   error (`command_lag` in a simulation's summary): a guidance that asks
+//!   for what the hull cannot do shows there, not as a tracking error.
+//!
+//! Invariants: pure, deterministic, no clocks (the caller passes the step);
+//! starts at the hull's own velocity, so a vessel at rest is given no step
+//! when its first command arrives.
+
+use super::Vec3;
+use super::controller::Reference;
+use super::model::VesselParams;
+
+/// Share of each actuator limit the reference may use; the rest is left to
+/// the controller's error feedback ∇.
+const MARGIN: f64 = 0.75;
+
+/// Bandwidth ω of the follower [1/s]: a jump at a tick is taken up with a
+/// time constant of 50 ms, half a tick.
+const BANDWIDTH: f64 = 20.0;
+
+/// The command in force: its value at the instant it was computed and its
+/// rates, i.e. the line c(t) from that instant on.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Line {
+    pub u_d: f64,
+    pub r_d: f64,
+    pub u_d_dot: f64,
+    pub r_d_dot: f64,
+}
+
+impl Line {
+    /// The line `since` seconds after its instant.
+    pub fn at(&self, since: f64) -> Reference {
+        Reference {
+            u_d: self.u_d + self.u_d_dot * since,
+            r_d: self.r_d + self.r_d_dot * since,
+            u_d_dot: self.u_d_dot,
+            r_d_dot: self.r_d_dot,
+        }
+    }
+
+    /// Station keeping: u_d = r_d = 0.
+    pub const HOLD: Line = Line {
+        u_d: 0.0,
+        r_d: 0.0,
+        u_d_dot: 0.0,
+        r_d_dot: 0.0,
+    };
+}
+
+/// The reference one vessel's controller tracks (see the module doc).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Governor {
+    params: VesselParams,
+    u: f64,
+    r: f64,
+}
+
+impl Governor {
+    /// A governor for a hull with `params` moving at `vel` (u, v, r).
+    pub fn new(params: VesselParams, vel: Vec3) -> Governor {
+        Governor {
+            params,
+            u: vel.x,
+            r: vel.z,
+        }
+    }
+
+    /// The reference (u_ref, r_ref) now.
+    pub fn current(&self) -> (f64, f64) {
+        (self.u, self.r)
+    }
+
+    /// The reference for the step from now to `h` later, given the command
+    /// line's value `line` now, the measured velocity `vel` and the
+    /// observer's estimate of the disturbance `estimate`; advances by `h`.
+    pub fn step(&mut self, line: &Reference, vel: Vec3, estimate: Vec3, h: f64) -> Reference {
+        let p = &self.params;
+        let (u, v, r) = (vel.x, vel.y, vel.z);
+        // What the controller spends besides m (ẏ + ∇): eq. 33–34 without
+        // the reference's share.
+        let rest_u = p.d11 * u - p.m22 * v * r - estimate.x;
+        let rest_r = p.d33 * r + (p.m22 - p.m11) * u * v - estimate.z;
+        let band = |lo: f64, hi: f64, rest: f64, m: f64| {
+            let (lo, hi) = ((MARGIN * lo - rest) / m, (MARGIN * hi - rest) / m);
+            // Actuators already overwhelmed: ask for no change either way.
+            if lo <= hi { (lo, hi) } else { (0.0, 0.0) }
+        };
+        let (ulo, uhi) = band(-p.tau_u_reverse, p.tau_u_max, rest_u, p.m11);
+        let (rlo, rhi) = band(-p.tau_r_max, p.tau_r_max, rest_r, p.m33);
+        let du = (line.u_d_dot + BANDWIDTH * (line.u_d - self.u)).clamp(ulo.min(0.0), uhi.max(0.0));
+        let dr = (line.r_d_dot + BANDWIDTH * (line.r_d - self.r)).clamp(rlo.min(0.0), rhi.max(0.0));
+        let reference = Reference {
+            u_d: self.u,
+            r_d: self.r,
+            u_d_dot: du,
+            r_d_dot: dr,
+        };
+        self.u += du * h;
+        self.r += dr * h;
+        reference
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const H: f64 = 1e-3;
+
+    #[test]
+    fn starts_at_the_hulls_velocity() {
+        let g = Governor::new(VesselParams::PAPER, Vec3::new(0.7, 0.1, -0.3));
+        assert_eq!(g.current(), (0.7, -0.3));
+    }
+
+    #[test]
+    fn a_line_the_hull_can_follow_is_given_unchanged() {
+        let p = VesselParams::PAPER;
+        let mut g = Governor::new(p, Vec3::new(0.5, 0.0, 0.1));
+        let line = Line {
+            u_d: 0.5,
+            r_d: 0.1,
+            u_d_dot: 0.2,
+            r_d_dot: -0.3,
+        };
+        for k in 0..2000 {
+            let since = k as f64 * H;
+            let c = line.at(since);
+            // The hull tracking exactly, no disturbance.
+            let vel = Vec3::new(g.current().0, 0.0, g.current().1);
+            let y = g.step(&c, vel, Vec3::zeros(), H);
+            assert!(
+                (y.u_d - c.u_d).abs() < 1e-9 && (y.r_d - c.r_d).abs() < 1e-9,
+                "{k}"
+            );
+            assert!((y.u_d_dot - 0.2).abs() < 1e-9 && (y.r_d_dot + 0.3).abs() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn a_step_is_taken_no_faster_than_the_actuators_allow() {
+        let p = VesselParams::PAPER;
+        let mut g = Governor::new(p, Vec3::zeros());
+        let step = Line {
+            u_d: 1.0,
+            r_d: -1.0,
+            ..Line::HOLD
+        };
+        let mut last = g.current();
+        for _ in 0..3000 {
+            let (u, r) = g.current();
+            let y = g.step(&step.at(0.0), Vec3::new(u, 0.0, r), Vec3::zeros(), H);
+            // The hull's own damping takes its share of the moment too.
+            let room_u = (MARGIN * p.tau_u_max - p.d11 * u) / p.m11;
+            let room_r = (MARGIN * p.tau_r_max + p.d33 * r) / p.m33;
+            assert!(y.u_d_dot <= room_u + 1e-12 && y.u_d_dot >= 0.0, "{y:?}");
+            assert!(-y.r_d_dot <= room_r + 1e-12 && y.r_d_dot <= 0.0, "{y:?}");
+            last = g.current();
+        }
+        // It gets there, continuously.
+        assert!(
+            (last.0 - 1.0).abs() < 1e-6 && (last.1 + 1.0).abs() < 1e-6,
+            "{last:?}"
+        );
+    }
+}
