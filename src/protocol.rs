@@ -477,7 +477,13 @@ pub struct PoseDocument {
     /// place in the partition.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub controlled: Option<bool>,
-    /// Free-form; the coordinator does not interpret it.
+    /// Free-form; the coordinator does not interpret it. The simulated
+    /// vessel (`seacover agent`) sends `tau_d` and `tau_d_hat` (the
+    /// disturbance and its estimate) and, each `{u, r}`, `tracking_error`
+    /// (largest |u − u_ref|, |r − r_ref| at any 1 ms step since its previous
+    /// pose, against the reference its controller was given) and
+    /// `command_lag` (largest gap between the command line and that
+    /// reference); the MAVLink bridge sends the autopilot's state.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub telemetry: Option<serde_json::Value>,
 }
