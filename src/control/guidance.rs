@@ -56,6 +56,7 @@
 //! - never leaves ±`max_yaw_rate` nor the safety filter's surge interval:
 //!   that bound is a constraint, and where it moves past the line the line
 //!   jumps to it (the filter's intervention, the one step left).
+//!
 //! The cost is one tick of delay on the raw law, which the coverage figures
 //! do not notice (`docs/reproducing-the-paper.md`).
 

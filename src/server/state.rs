@@ -233,7 +233,8 @@ pub enum MissionChange {
 /// What a change answers with.
 #[derive(Debug, Clone)]
 pub enum ChangeResult {
-    Mission(MissionDocument),
+    // Boxed: the mission document is far larger than the other answers.
+    Mission(Box<MissionDocument>),
     Object(RiskObjectDocument),
     Deleted,
 }
@@ -334,7 +335,7 @@ impl Mission {
         let answer = match (change, result) {
             (MissionChange::DeleteObject(_), _) => ChangeResult::Deleted,
             (_, Some(object)) => ChangeResult::Object(object),
-            (_, None) => ChangeResult::Mission(next.document()),
+            (_, None) => ChangeResult::Mission(Box::new(next.document())),
         };
         Ok((next, answer))
     }
