@@ -117,8 +117,12 @@ pub struct GuidanceGains {
     /// Time constant of the filters on ψ̇_r, Ċ, u̇_d, ṙ_d [s].
     pub filter_time: f64,
     /// Largest rate of change of the `course` mode's yaw-rate command
-    /// [rad/s²]: keep it within what the hull's yaw moment can give (the
-    /// paper's vessel: 1 rad/s²), like ArduPilot's `ATC_STR_ACC_MAX`.
+    /// [rad/s²], like ArduPilot's `ATC_STR_ACC_MAX` (whose default, 120°/s²,
+    /// this one's is). It is inside the guidance loop: much tighter, and
+    /// its lag makes the heading weave (0.5 does, with ArduPilot's boats).
+    /// A hull with less yaw authority (the paper's vessel: 1 rad/s²) is
+    /// kept within it by its own reference governor
+    /// ([`reference`](super::reference)).
     pub yaw_accel: f64,
     /// Largest rate of change of the `course` mode's surge command [m/s²]
     /// beyond the rate the turning bow itself asks for (the paper's vessel:
@@ -140,7 +144,7 @@ impl Default for GuidanceGains {
             max_speed: 2.0,
             max_yaw_rate: 1.0,
             filter_time: 0.5,
-            yaw_accel: 0.5,
+            yaw_accel: 2.0,
             surge_accel: 0.75,
         }
     }
@@ -208,6 +212,10 @@ pub struct Guidance {
     /// does).
     pub ahead_only: bool,
 }
+
+/// The surge an ahead-only vessel keeps while its bow comes round, so that
+/// its rudder bites [m/s] (capped by the desired speed).
+const STEERAGE: f64 = 0.5;
 
 /// The `course` mode switches between ahead and astern when the heading
 /// error of the current choice exceeds this (a right angle plus hysteresis).
@@ -421,12 +429,24 @@ impl Guidance {
                     let alpha = psi_e.cos().max(0.0).powi(2);
                     let (u, v) = (state.vel.x, state.vel.y);
                     let u_d = alpha * u_d + (1.0 - alpha) * u;
-                    (
-                        if self.ahead_only { u_d.max(0.0) } else { u_d },
-                        r_d,
-                        psi_e,
-                        Some(alpha * r_d * beam + (1.0 - alpha) * v * r_d),
-                    )
+                    let u_d_dot = alpha * r_d * beam + (1.0 - alpha) * v * r_d;
+                    if self.ahead_only {
+                        // A hull that cannot go astern mostly cannot turn on
+                        // the spot either: its rudder or outboard bites only
+                        // with water flowing past. Coasting at rest, it would
+                        // never come round (ArduPilot's boats turn at
+                        // 0.03 rad/s so); keep steerage way instead, no more
+                        // than the speed wanted, so a vessel at its goal
+                        // stays put.
+                        let steerage = STEERAGE.min(wd.0.hypot(wd.1)) * (1.0 - alpha);
+                        if u_d < steerage {
+                            (steerage, r_d, psi_e, Some(0.0))
+                        } else {
+                            (u_d, r_d, psi_e, Some(u_d_dot))
+                        }
+                    } else {
+                        (u_d, r_d, psi_e, Some(u_d_dot))
+                    }
                 }
             }
         };
@@ -606,12 +626,23 @@ mod tests {
             psi: 0.0,
             vel: Vec3::zeros(),
         };
+        let max = GuidanceGains::default().max_yaw_rate;
         for k in 0..20 {
             let c = g.update(0.1 * k as f64, &s, (-10.0, 1.0));
             assert!(c.u_d >= 0.0, "{c:?}");
-            assert!(c.r_d_dot > 0.0 && c.psi_e > 1.9, "{c:?}");
+            assert!((c.r_d_dot > 0.0 || c.r_d == max) && c.psi_e > 1.9, "{c:?}");
             assert!(k == 0 || c.r_d > 0.0, "{c:?}");
         }
+        // ... and makes steerage way to do it, which a vessel that can go
+        // astern does not (it coasts, and thrusts astern).
+        let c = settle(&mut g, 2.0, 20, &s, (-10.0, 1.0));
+        assert!((c.u_d - STEERAGE).abs() < 1e-9, "{c:?}");
+        let mut both = Guidance::new(GuidanceGains::default());
+        assert!(settle(&mut both, 0.0, 20, &s, (-10.0, 1.0)).u_d < 0.0);
+        // At its goal it stays put.
+        let mut at_goal = Guidance::new(GuidanceGains::default());
+        at_goal.ahead_only = true;
+        assert_eq!(settle(&mut at_goal, 0.0, 20, &s, (0.0, 0.0)).u_d, 0.0);
         // Moving ahead at 1 m/s, goal behind: no astern thrust to brake.
         let moving = State {
             vel: Vec3::new(1.0, 0.0, 0.0),
