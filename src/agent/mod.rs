@@ -34,7 +34,7 @@ use crate::control::controller::{ControllerGains, control};
 use crate::control::disturbance::Disturbance;
 use crate::control::model::{State, VesselParams, step};
 use crate::control::observer::{Observer, ObserverGains};
-use crate::control::reference::{Governor, Line};
+use crate::control::reference::{Governor, Line, Peaks};
 use crate::protocol::{CommandDocument, PoseDocument};
 
 /// One simulated vessel's settings.
@@ -116,11 +116,8 @@ struct Onboard {
     /// The newest command and the on-board time it arrived.
     command: Option<(CommandDocument, f64)>,
     governor: Governor,
-    /// Largest |u − u_ref|, |r − r_ref| since the previous pose.
-    peak_error: (f64, f64),
-    /// Largest |c − ref| (command line against the governor's reference)
-    /// since the previous pose.
-    peak_lag: (f64, f64),
+    /// Largest tracking error and command lag since the previous pose.
+    peaks: Peaks,
 }
 
 impl Onboard {
@@ -134,8 +131,7 @@ impl Onboard {
             t: 0.0,
             command: None,
             governor: Governor::new(v.params, v.start.vel),
-            peak_error: (0.0, 0.0),
-            peak_lag: (0.0, 0.0),
+            peaks: Peaks::default(),
         }
     }
 
@@ -158,17 +154,7 @@ impl Onboard {
             self.observer.measure(self.state.vel, h);
             let (vel, est) = (self.state.vel, self.observer.estimate());
             let reference = self.governor.step(&line, vel, est, h);
-            let max = |peak: &mut (f64, f64), e: (f64, f64)| {
-                *peak = (peak.0.max(e.0.abs()), peak.1.max(e.1.abs()));
-            };
-            max(
-                &mut self.peak_error,
-                (vel.x - reference.u_d, vel.z - reference.r_d),
-            );
-            max(
-                &mut self.peak_lag,
-                (line.u_d - reference.u_d, line.r_d - reference.r_d),
-            );
+            self.peaks.record(vel, &line, &reference);
             let (tu, tr) = control(&self.params, &self.controller, vel, &reference, est);
             let d = &self.disturbance;
             let (next, applied) = step(&self.params, &self.state, tu, tr, self.t, h, |t, s| {
@@ -187,12 +173,8 @@ impl Onboard {
     /// (it was most of an 8-vessel recording's size).
     /// Also starts the next interval of `tracking_error` and `command_lag`.
     fn pose(&mut self) -> PoseDocument {
-        let (error, lag) = (
-            std::mem::take(&mut self.peak_error),
-            std::mem::take(&mut self.peak_lag),
-        );
-        let pair =
-            |(u, r): (f64, f64)| serde_json::json!({"u": decimals(u, 5), "r": decimals(r, 5)});
+        let Peaks { error, lag } = std::mem::take(&mut self.peaks);
+        let pair = |(u, r): (f64, f64)| serde_json::json!({"u": decimals(u.abs(), 5), "r": decimals(r.abs(), 5)});
         let tau = self.disturbance.value(self.t, self.state.psi);
         let est = self.observer.estimate();
         let s = &self.state;

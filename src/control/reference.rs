@@ -133,11 +133,53 @@ impl Governor {
     }
 }
 
+/// The largest tracking error (u − u_ref, r − r_ref) and command lag
+/// (c − ref) per channel over an interval, by magnitude with the sign kept:
+/// what the simulator plots per tick and a networked vessel reports per
+/// pose, so that nothing between two samples is hidden.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Peaks {
+    pub error: (f64, f64),
+    pub lag: (f64, f64),
+}
+
+impl Peaks {
+    /// One dynamics step: the hull at `vel`, the command line at `line`,
+    /// the controller given `reference`.
+    pub fn record(&mut self, vel: Vec3, line: &Reference, reference: &Reference) {
+        let larger = |peak: &mut f64, x: f64| {
+            if x.abs() > peak.abs() {
+                *peak = x;
+            }
+        };
+        larger(&mut self.error.0, vel.x - reference.u_d);
+        larger(&mut self.error.1, vel.z - reference.r_d);
+        larger(&mut self.lag.0, line.u_d - reference.u_d);
+        larger(&mut self.lag.1, line.r_d - reference.r_d);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     const H: f64 = 1e-3;
+
+    #[test]
+    fn peaks_keep_the_largest_magnitude_with_its_sign() {
+        let mut p = Peaks::default();
+        let at = |u_d: f64, r_d: f64| Reference {
+            u_d,
+            r_d,
+            ..Reference::default()
+        };
+        p.record(Vec3::new(1.0, 0.0, 0.5), &at(1.5, 0.5), &at(1.2, 0.6));
+        p.record(Vec3::new(1.0, 0.0, 0.5), &at(1.0, 0.0), &at(1.1, 0.3));
+        // u error −0.2 then −0.1: the first stays; r error −0.1 then +0.2:
+        // the larger replaces it with its own sign.
+        assert!((p.error.0 + 0.2).abs() < 1e-12 && (p.error.1 - 0.2).abs() < 1e-12);
+        assert!((p.lag.0 - 0.3).abs() < 1e-12 && (p.lag.1 + 0.3).abs() < 1e-12);
+    }
 
     #[test]
     fn starts_at_the_hulls_velocity() {

@@ -29,7 +29,7 @@ use crate::control::disturbance::{Disturbance, Gusts};
 use crate::control::guidance::{Command, Guidance, GuidanceGains};
 use crate::control::model::{State, VesselParams, step};
 use crate::control::observer::{Observer, ObserverGains};
-use crate::control::reference::{Governor, Line};
+use crate::control::reference::{Governor, Line, Peaks};
 use crate::control::safety::{SafetyLayer, SafetyParams};
 use crate::control::{Vec3, lloyd};
 use crate::coverage::{CellGeometry, Fleet, Options, Vessel, evaluate};
@@ -392,7 +392,7 @@ pub fn run(config: &Config, mut progress: impl FnMut(f64)) -> Result<Run, SimErr
         1.0 / config.tick_hz,
     );
     let mut lines = vec![Line::HOLD; n];
-    let mut peaks = vec![(0.0, 0.0); n];
+    let mut peaks = vec![Peaks::default(); n];
     let mut governors: Vec<Governor> = states
         .iter()
         .map(|s| Governor::new(config.vessel, s.vel))
@@ -413,6 +413,8 @@ pub fn run(config: &Config, mut progress: impl FnMut(f64)) -> Result<Run, SimErr
     let mut snapshots = Vec::new();
     let mut pending_snapshots: Vec<f64> = config.snapshots.clone();
     let mut measures = Measures::default();
+    // Every vessel's tracking after 20 s.
+    let mut late = Peaks::default();
 
     for k in 0..=steps {
         let t = k as f64 * h;
@@ -457,7 +459,7 @@ pub fn run(config: &Config, mut progress: impl FnMut(f64)) -> Result<Run, SimErr
                     tau_d: disturbances[i].value(t, states[i].psi),
                     estimate: observers[i].estimate(),
                     reference: governors[i].current(),
-                    peak_error: std::mem::take(&mut peaks[i]),
+                    peak_error: std::mem::take(&mut peaks[i]).error,
                 });
             }
             if let Some(pos) = pending_snapshots.iter().position(|&ts| ts <= t + 1e-9) {
@@ -506,22 +508,9 @@ pub fn run(config: &Config, mut progress: impl FnMut(f64)) -> Result<Run, SimErr
             let since = (k % per_tick) as f64 * h;
             let line = lines[i].at(since);
             let reference = governors[i].step(&line, s.vel, est, h);
-            let error = (s.vel.x - reference.u_d, s.vel.z - reference.r_d);
-            let peak = &mut peaks[i];
-            if error.0.abs() > peak.0.abs() {
-                peak.0 = error.0;
-            }
-            if error.1.abs() > peak.1.abs() {
-                peak.1 = error.1;
-            }
+            peaks[i].record(s.vel, &line, &reference);
             if t >= 20.0 {
-                let m = &mut measures;
-                m.u_error_max_after_20s =
-                    m.u_error_max_after_20s.max((s.vel.x - reference.u_d).abs());
-                m.r_error_max_after_20s =
-                    m.r_error_max_after_20s.max((s.vel.z - reference.r_d).abs());
-                m.u_lag_max_after_20s = m.u_lag_max_after_20s.max((line.u_d - reference.u_d).abs());
-                m.r_lag_max_after_20s = m.r_lag_max_after_20s.max((line.r_d - reference.r_d).abs());
+                late.record(s.vel, &line, &reference);
             }
             let (tu, tr) = control(&config.vessel, &config.controller, s.vel, &reference, est);
             let dist = &disturbances[i];
@@ -533,6 +522,10 @@ pub fn run(config: &Config, mut progress: impl FnMut(f64)) -> Result<Run, SimErr
         }
         monitor.step(&states, layer.shore());
     }
+    measures.u_error_max_after_20s = late.error.0.abs();
+    measures.r_error_max_after_20s = late.error.1.abs();
+    measures.u_lag_max_after_20s = late.lag.0.abs();
+    measures.r_lag_max_after_20s = late.lag.1.abs();
     Ok(Run {
         ticks,
         snapshots,
