@@ -15,7 +15,10 @@
 //!    pushed off one wall of a concave corner into another's margin is
 //!    pushed again. This approximates the nearest point of the piece eroded
 //!    by the clearance; in a passage narrower than twice the clearance there
-//!    is none, and the goal settles on the passage's middle line.
+//!    is none, and the goal settles on the passage's middle line;
+//! 4. should that leave it on the shore (a needle of water too thin for
+//!    any push, the goal left on its tip), a point inside the vessel's own
+//!    piece instead, else inside Q (`geo`'s interior point).
 //!
 //! Only the shore (∂Q) counts for the clearance, not the cell's edges to
 //! other vessels: those are not obstacles, and a goal just across one is
@@ -25,9 +28,9 @@
 //!
 //! Invariants: pure, deterministic, total (an empty cell's centroid is
 //! already the nearest point of Q and is only moved off the shore); the goal
-//! is in Q whenever the centroid or the vessel is.
+//! is in Q.
 
-use geo::{Contains, Coord};
+use geo::{Contains, Coord, InteriorPoint};
 
 use super::{CellGeometry, CellResult};
 use crate::geometry::shore::Shore;
@@ -55,12 +58,32 @@ pub fn reachable_goal(shore: &Shore, cell: &CellResult, p: Point, clearance: f64
             }
         }
     };
-    off_the_shore(shore, projected, clearance)
+    let goal = off_the_shore(shore, projected, clearance);
+    if region.contains(goal) {
+        return goal;
+    }
+    // Water too thin for any push (a needle of Q, the goal left on its
+    // tip, on the shore): a point inside the vessel's own piece, else
+    // inside Q. Rare, so the cost of building the pieces does not matter.
+    let inside = |poly: &geo::Polygon<f64>| {
+        poly.interior_point()
+            .map(|q| Point { x: q.x(), y: q.y() })
+            .filter(|q| region.contains(*q))
+    };
+    let piece = match &cell.geometry {
+        CellGeometry::Empty => None,
+        geometry => own_piece(geometry, shore, p),
+    };
+    piece
+        .as_ref()
+        .and_then(inside)
+        .or_else(|| inside(region.polygon()))
+        .unwrap_or(goal)
 }
 
-/// The point of the vessel's own piece of the cell nearest to `c`.
-fn on_own_piece(geometry: &CellGeometry, shore: &Shore, p: Point, c: Point) -> Point {
-    let pieces = geometry.pieces(shore.region());
+/// The piece of the cell (cell ∩ Q) that contains the vessel at `p`, or
+/// the nearest one; `None` for a cell without pieces.
+fn own_piece(geometry: &CellGeometry, shore: &Shore, p: Point) -> Option<geo::Polygon<f64>> {
     let distance_to = |poly: &geo::Polygon<f64>, q: Point| -> f64 {
         if poly.contains(&Coord { x: q.x, y: q.y }) {
             0.0
@@ -68,18 +91,24 @@ fn on_own_piece(geometry: &CellGeometry, shore: &Shore, p: Point, c: Point) -> P
             nearest_on_boundary(poly, q).1
         }
     };
-    let own = pieces
+    geometry
+        .pieces(shore.region())
         .0
-        .iter()
-        .map(|poly| (distance_to(poly, p), poly))
-        .min_by(|a, b| a.0.total_cmp(&b.0));
-    match own {
+        .into_iter()
+        .map(|poly| (distance_to(&poly, p), poly))
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .map(|(_, poly)| poly)
+}
+
+/// The point of the vessel's own piece of the cell nearest to `c`.
+fn on_own_piece(geometry: &CellGeometry, shore: &Shore, p: Point, c: Point) -> Point {
+    match own_piece(geometry, shore, p) {
         None => c,
-        Some((_, poly)) => {
+        Some(poly) => {
             if poly.contains(&Coord { x: c.x, y: c.y }) {
                 c
             } else {
-                nearest_on_boundary(poly, c).0
+                nearest_on_boundary(&poly, c).0
             }
         }
     }
