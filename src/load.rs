@@ -1090,6 +1090,7 @@ async fn handshake(id: &str, shared: &Shared) -> Result<Socket, String> {
         protocol: 1,
         actuator: None,
         astern: None,
+        agility: None,
     };
     socket
         .send(Message::text(

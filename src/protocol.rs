@@ -432,6 +432,15 @@ pub struct ActuatorDocument {
     pub beta: f64,
 }
 
+/// How fast a vessel's commands may change for it to follow them.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
+pub struct AgilityDocument {
+    /// Largest |ṙ_d| [rad/s²], > 0.
+    pub yaw_accel: f64,
+    /// Largest |u̇_d| [m/s²], > 0.
+    pub surge_accel: f64,
+}
+
 /// Vessel → coordinator on `/api/v1/vessels/link`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
 #[serde(tag = "type", rename_all = "snake_case")]
@@ -451,6 +460,12 @@ pub enum VesselMessage {
         /// is guided ahead only: it turns round rather than backing up.
         #[serde(default, skip_serializing_if = "Option::is_none")]
         astern: Option<bool>,
+        /// The command rates the vessel can follow. Omitted: the mission's
+        /// `yaw_accel` and `surge_accel` alone; declared: its commands change
+        /// no faster than the smaller of the two. The simulated vessel
+        /// declares its reference governor's share of its actuators.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        agility: Option<AgilityDocument>,
     },
     /// A pose report.
     Pose(PoseDocument),

@@ -200,6 +200,7 @@ fn the_link_schema_accepts_the_real_messages() {
             protocol: 1,
             actuator: None,
             astern: None,
+            agility: None,
         },
         VesselMessage::Hello {
             vessel: "usv-2".into(),
@@ -209,6 +210,10 @@ fn the_link_schema_accepts_the_real_messages() {
                 beta: 0.001,
             }),
             astern: Some(false),
+            agility: Some(seacover::protocol::AgilityDocument {
+                yaw_accel: 0.75,
+                surge_accel: 0.5,
+            }),
         },
         VesselMessage::Pose(pose()),
         VesselMessage::Pose(PoseDocument {
@@ -264,6 +269,9 @@ fn the_link_schema_agrees_with_serde_on_edge_cases() {
         json!({"type": "hello", "vessel": "a", "protocol": "1"}),
         json!({"type": "hello", "vessel": "a", "protocol": -1}),
         json!({"type": "hello", "vessel": "a", "protocol": 1, "actuator": {"k": 1}}),
+        json!({"type": "hello", "vessel": "a", "protocol": 1, "agility": {"yaw_accel": 0.5, "surge_accel": 1}}),
+        json!({"type": "hello", "vessel": "a", "protocol": 1, "agility": {"yaw_accel": 0.5}}),
+        json!({"type": "hello", "vessel": "a", "protocol": 1, "agility": null}),
         json!({"type": "pose", "t": 0, "x": 1, "y": 2, "psi": 0, "u": 0, "v": 0}),
         json!({"type": "pose", "t": 0, "x": "1", "y": 2, "psi": 0, "u": 0, "v": 0, "r": 0}),
         json!({"type": "Pose", "t": 0, "x": 1, "y": 2, "psi": 0, "u": 0, "v": 0, "r": 0}),

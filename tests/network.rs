@@ -627,3 +627,82 @@ async fn deleting_a_vessel_forgets_it_and_tells_its_link() {
     assert_eq!(e["error"]["code"], "not_found");
     server.stop().await;
 }
+
+/// A vessel that declares in its hello the command rates it can follow
+/// (`agility`) is asked for no more; one that declares nothing gets the
+/// mission's bounds (`yaw_accel` 2 rad/s²); a declaration that is not a
+/// pair of positive numbers is refused.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn commands_change_no_faster_than_the_vessel_declared() {
+    let server = start().await;
+    // `null` declares nothing.
+    let link = |id: &'static str, agility: Value| {
+        let url = server.ws();
+        async move {
+            let (socket, _) = tokio_tungstenite::connect_async(url).await.unwrap();
+            let (mut sink, mut stream) = socket.split();
+            let mut hello = json!({"type": "hello", "vessel": id, "protocol": 1});
+            hello["agility"] = agility;
+            sink.send(Message::text(hello.to_string())).await.unwrap();
+            let first = next_json(&mut stream).await;
+            (sink, stream, first)
+        }
+    };
+    for (bad, code) in [
+        (json!({"yaw_accel": 0.0, "surge_accel": 0.1}), "invalid"),
+        (json!({"yaw_accel": -1.0, "surge_accel": 0.1}), "invalid"),
+        (json!({"yaw_accel": 0.2}), "malformed"),
+        (
+            json!({"yaw_accel": "fast", "surge_accel": 0.1}),
+            "malformed",
+        ),
+    ] {
+        let (_, _, first) = link("slow", bad.clone()).await;
+        assert_eq!(first["type"], "error", "{bad}: {first}");
+        assert_eq!(first["code"], code, "{bad}: {first}");
+    }
+
+    let (mut slow, mut slow_in, welcome) =
+        link("slow", json!({"yaw_accel": 0.2, "surge_accel": 0.1})).await;
+    assert_eq!(welcome["type"], "welcome", "{welcome}");
+    let (mut nimble, mut nimble_in, welcome) = link("nimble", Value::Null).await;
+    assert_eq!(welcome["type"], "welcome", "{welcome}");
+    // Both at rest with their bows away from their goals: each command line
+    // heads for a hard turn and ramps as fast as it may.
+    let at = |x: f64, psi: f64| {
+        Message::text(
+            json!({"type": "pose", "t": 0.0, "x": x, "y": 30.0, "psi": psi,
+                   "u": 0.0, "v": 0.0, "r": 0.0})
+            .to_string(),
+        )
+    };
+    let (mut slow_rates, mut nimble_rates) = ((0.0f64, 0.0f64), (0.0f64, 0.0f64));
+    let mut seen = (0, 0);
+    for _ in 0..40 {
+        let _ = slow.send(at(80.0, 0.0)).await;
+        let _ = nimble.send(at(20.0, std::f64::consts::PI)).await;
+        for (stream, rates, count) in [
+            (&mut slow_in, &mut slow_rates, &mut seen.0),
+            (&mut nimble_in, &mut nimble_rates, &mut seen.1),
+        ] {
+            let m = next_json(stream).await;
+            if m["type"] == "command" {
+                let r_dot = m["r_d_dot"].as_f64().unwrap().abs();
+                let u_dot = m["u_d_dot"].as_f64().unwrap().abs();
+                rates.0 = rates.0.max(r_dot);
+                rates.1 = rates.1.max(u_dot);
+                *count += 1;
+            }
+        }
+    }
+    assert!(seen.0 >= 30 && seen.1 >= 30, "commands seen: {seen:?}");
+    assert!(
+        slow_rates.0 <= 0.2 + 1e-9 && slow_rates.1 <= 0.1 + 1e-9,
+        "the slow vessel was asked for |ṙ_d|, |u̇_d| up to {slow_rates:?}"
+    );
+    assert!(
+        nimble_rates.0 > 1.0,
+        "the undeclared vessel's commands never used the mission's yaw_accel: {nimble_rates:?}"
+    );
+    server.stop().await;
+}

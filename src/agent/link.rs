@@ -22,7 +22,9 @@ use tokio::sync::{mpsc, watch};
 use tokio_tungstenite::tungstenite::Message;
 use tokio_util::sync::CancellationToken;
 
-use crate::protocol::{CommandDocument, CoordinatorMessage, PoseDocument, VesselMessage};
+use crate::protocol::{
+    AgilityDocument, CommandDocument, CoordinatorMessage, PoseDocument, VesselMessage,
+};
 
 /// What the link hands the vessel.
 #[derive(Debug, Clone)]
@@ -49,6 +51,8 @@ pub struct LinkConfig {
     /// Said in the hello: `Some(false)` for a vessel that cannot thrust
     /// astern.
     pub astern: Option<bool>,
+    /// Said in the hello: the command rates the vessel can follow.
+    pub agility: Option<AgilityDocument>,
 }
 
 /// The WebSocket URL of a coordinator's vessel link from its base URL
@@ -125,6 +129,7 @@ pub async fn run(
             protocol: 1,
             actuator: None,
             astern: config.astern,
+            agility: config.agility,
         };
         if sink.send(text(&hello)).await.is_err() {
             continue;

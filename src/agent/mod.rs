@@ -34,8 +34,8 @@ use crate::control::controller::{ControllerGains, control};
 use crate::control::disturbance::Disturbance;
 use crate::control::model::{State, VesselParams, step};
 use crate::control::observer::{Observer, ObserverGains};
-use crate::control::reference::{Governor, Line, Peaks};
-use crate::protocol::{CommandDocument, PoseDocument};
+use crate::control::reference::{Governor, Line, Peaks, agility};
+use crate::protocol::{AgilityDocument, CommandDocument, PoseDocument};
 
 /// One simulated vessel's settings.
 #[derive(Debug, Clone)]
@@ -245,6 +245,13 @@ async fn run_vessel(
             vessel: vessel.id.clone(),
             seed,
             astern: None,
+            agility: Some({
+                let a = agility(&vessel.params);
+                AgilityDocument {
+                    yaw_accel: a.yaw_accel,
+                    surge_accel: a.surge_accel,
+                }
+            }),
         },
         pose_slot,
         commands,

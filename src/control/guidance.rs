@@ -52,7 +52,9 @@
 //!   without one, at its own velocity): the command is continuous in time;
 //! - heads for the raw output by the next tick, with ṙ_d bounded by
 //!   `yaw_accel` and u̇_d by `surge_accel` (the raw u̇_d of the turning bow
-//!   fed forward), as ArduPilot bounds its steering and speed targets;
+//!   fed forward), as ArduPilot bounds its steering and speed targets, and
+//!   by the vessel's own [`Agility`] where it declared one (a hull with less
+//!   authority than the mission's bounds is asked only for what it can do);
 //! - never leaves ±`max_yaw_rate` nor the safety filter's surge interval:
 //!   that bound is a constraint, and where it moves past the line the line
 //!   jumps to it (the filter's intervention, the one step left).
@@ -120,13 +122,12 @@ pub struct GuidanceGains {
     /// [rad/s²], like ArduPilot's `ATC_STR_ACC_MAX` (whose default, 120°/s²,
     /// this one's is). It is inside the guidance loop: much tighter, and
     /// its lag makes the heading weave (0.5 does, with ArduPilot's boats).
-    /// A hull with less yaw authority (the paper's vessel: 1 rad/s²) is
-    /// kept within it by its own reference governor
-    /// ([`reference`](super::reference)).
+    /// A hull with less yaw authority (the paper's vessel: 1 rad/s²)
+    /// declares its own bound ([`Agility`]).
     pub yaw_accel: f64,
-    /// Largest rate of change of the `course` mode's surge command [m/s²]
-    /// beyond the rate the turning bow itself asks for (the paper's vessel:
-    /// 1 m/s²), like ArduPilot's `ATC_ACCEL_MAX`.
+    /// Largest rate of change of the `course` mode's surge command [m/s²],
+    /// the turning bow's own rate included (the paper's vessel: 1 m/s²),
+    /// like ArduPilot's `ATC_ACCEL_MAX`.
     pub surge_accel: f64,
 }
 
@@ -148,6 +149,27 @@ impl Default for GuidanceGains {
             surge_accel: 0.75,
         }
     }
+}
+
+/// The command rates one vessel can follow, as it declares them (the
+/// simulated vessel: its reference governor's share of its actuators,
+/// [`reference::agility`](super::reference::agility)). The `course` mode
+/// bounds that vessel's ṙ_d and u̇_d by the smaller of these and the
+/// mission's `yaw_accel`, `surge_accel`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Agility {
+    /// [rad/s²]
+    pub yaw_accel: f64,
+    /// [m/s²]
+    pub surge_accel: f64,
+}
+
+impl Agility {
+    /// A vessel that declared nothing: the mission's bounds alone.
+    pub const UNDECLARED: Agility = Agility {
+        yaw_accel: f64::INFINITY,
+        surge_accel: f64::INFINITY,
+    };
 }
 
 /// One guidance output.
@@ -211,6 +233,8 @@ pub struct Guidance {
     /// instead and never asks for a negative surge (the `paper` law never
     /// does).
     pub ahead_only: bool,
+    /// What the vessel declared it can follow.
+    pub agility: Agility,
 }
 
 /// The surge an ahead-only vessel keeps while its bow comes round, so that
@@ -233,6 +257,7 @@ impl Guidance {
             line: None,
             astern: false,
             ahead_only: false,
+            agility: Agility::UNDECLARED,
         }
     }
 
@@ -306,6 +331,8 @@ impl Guidance {
         surge: (f64, f64),
     ) -> (f64, f64, f64, f64, f64) {
         let g = self.gains;
+        let yaw_accel = g.yaw_accel.min(self.agility.yaw_accel);
+        let surge_accel = g.surge_accel.min(self.agility.surge_accel);
         let (lo, hi) = if self.ahead_only {
             (surge.0.max(0.0), surge.1.max(0.0))
         } else {
@@ -330,15 +357,13 @@ impl Guidance {
         // Reach the law's output by the next command if the rate bounds
         // allow (u's own rate fed forward), never leaving the bounds.
         let u_dot = (raw_u_dot + (bounded_u - u) / period)
-            .clamp(-g.surge_accel, g.surge_accel)
+            .clamp(-surge_accel, surge_accel)
             .max((lo - u) / period)
             .min((hi - u) / period);
-        let r_dot = ((raw_r - r) / period)
-            .clamp(-g.yaw_accel, g.yaw_accel)
-            .clamp(
-                (-g.max_yaw_rate - r) / period,
-                (g.max_yaw_rate - r) / period,
-            );
+        let r_dot = ((raw_r - r) / period).clamp(-yaw_accel, yaw_accel).clamp(
+            (-g.max_yaw_rate - r) / period,
+            (g.max_yaw_rate - r) / period,
+        );
         self.line = Some(Line {
             t,
             u,
@@ -612,6 +637,40 @@ mod tests {
         };
         let c = g.update(100.0, &s, (5.0, 5.0));
         assert_eq!((c.u_d, c.r_d), (0.3, -0.2));
+    }
+
+    #[test]
+    fn a_vessel_is_asked_for_no_more_than_its_declared_agility() {
+        let gains = GuidanceGains::default();
+        let agility = Agility {
+            yaw_accel: 0.3,
+            surge_accel: 0.2,
+        };
+        let mut slow = Guidance::new(gains);
+        slow.agility = agility;
+        let mut nimble = Guidance::new(gains);
+        let (mut slow_peak, mut nimble_peak) = (0.0f64, 0.0f64);
+        // At rest, bow east, goal behind to the north-west: a hard turn.
+        let s = State {
+            x: 0.0,
+            y: 0.0,
+            psi: 0.0,
+            vel: Vec3::zeros(),
+        };
+        for k in 0..50 {
+            let t = 0.1 * k as f64;
+            let c = slow.update(t, &s, (-20.0, 15.0));
+            assert!(c.r_d_dot.abs() <= agility.yaw_accel + 1e-12, "{c:?}");
+            assert!(c.u_d_dot.abs() <= agility.surge_accel + 1e-12, "{c:?}");
+            slow_peak = slow_peak.max(c.r_d_dot.abs());
+            nimble_peak = nimble_peak.max(nimble.update(t, &s, (-20.0, 15.0)).r_d_dot.abs());
+        }
+        // Both ramp as fast as they may: the bound is the one that binds.
+        assert!((slow_peak - agility.yaw_accel).abs() < 1e-12, "{slow_peak}");
+        assert!(
+            (nimble_peak - gains.yaw_accel).abs() < 1e-12,
+            "{nimble_peak}"
+        );
     }
 
     #[test]

@@ -39,6 +39,7 @@
 
 use super::Vec3;
 use super::controller::Reference;
+use super::guidance::Agility;
 use super::model::VesselParams;
 
 /// Share of each actuator limit the reference may use; the rest is left to
@@ -77,6 +78,19 @@ impl Line {
         u_d_dot: 0.0,
         r_d_dot: 0.0,
     };
+}
+
+/// The command rates `params`' governor can follow without holding them
+/// back: its share ([`MARGIN`]) of the actuators' acceleration at rest, the
+/// weaker direction for surge. The simulated vessel declares it in its hello
+/// so that the coordinator asks it only for that
+/// ([`Agility`](super::guidance::Agility)); damping and the disturbance take
+/// a little of it under way, which shows as a small `command_lag`.
+pub fn agility(params: &VesselParams) -> Agility {
+    Agility {
+        yaw_accel: MARGIN * params.tau_r_max / params.m33,
+        surge_accel: MARGIN * params.tau_u_max.min(params.tau_u_reverse) / params.m11,
+    }
 }
 
 /// The reference one vessel's controller tracks (see the module doc).
@@ -209,6 +223,42 @@ mod tests {
             );
             assert!((y.u_d_dot - 0.2).abs() < 1e-9 && (y.r_d_dot + 0.3).abs() < 1e-9);
         }
+    }
+
+    /// A reversal of the turn from +1 to −1 rad/s, ramped at the mission's
+    /// 2 rad/s²: the paper's hull (1 rad/s² of authority) falls far behind.
+    /// Ramped at the rate it declares, it keeps up but for what its damping
+    /// takes.
+    #[test]
+    fn a_line_ramped_at_the_declared_agility_is_followed() {
+        let p = VesselParams::PAPER;
+        assert_eq!(
+            agility(&p),
+            Agility {
+                yaw_accel: 0.75,
+                surge_accel: 0.75
+            }
+        );
+        let worst_lag = |accel: f64| {
+            let mut g = Governor::new(p, Vec3::new(0.0, 0.0, 1.0));
+            let mut lag = 0.0f64;
+            for k in 0..6000 {
+                let r_d = (1.0 - accel * k as f64 * H).max(-1.0);
+                let c = Line {
+                    r_d,
+                    r_d_dot: if r_d > -1.0 { -accel } else { 0.0 },
+                    ..Line::HOLD
+                };
+                let (u, r) = g.current();
+                let y = g.step(&c.at(0.0), Vec3::new(u, 0.0, r), Vec3::zeros(), H);
+                lag = lag.max((y.r_d - r_d).abs());
+            }
+            lag
+        };
+        let fast = worst_lag(2.0);
+        let declared = worst_lag(agility(&p).yaw_accel);
+        assert!(fast > 0.5, "{fast}");
+        assert!(declared < 0.02, "{declared}");
     }
 
     #[test]

@@ -32,7 +32,7 @@ use tokio_util::sync::CancellationToken;
 use super::error::ApiError;
 use super::store::Store;
 use crate::control::barrier::Scratch;
-use crate::control::guidance::{Guidance, GuidanceGains, GuidanceMode};
+use crate::control::guidance::{Agility, Guidance, GuidanceGains, GuidanceMode};
 use crate::control::model::State;
 use crate::control::safety::{SafetyLayer, SafetyParams};
 use crate::coverage::evaluate::cell_figures;
@@ -41,9 +41,10 @@ use crate::coverage::{CellResult, Evaluation, Fleet, Options, RiskField, Vessel,
 use crate::geometry::geodesy::LocalFrame;
 use crate::geometry::{Point, Region};
 use crate::protocol::{
-    ActuatorDocument, CommandDocument, CoordinatorMessage, CoverageDocument, GuidanceDocument,
-    MissionDocument, OriginDocument, PoseDocument, RegionDocument, RegionInput, RiskDocument,
-    RiskObjectDocument, RiskObjectInput, SafetyDocument, SnapshotDocument, VesselStatusDocument,
+    ActuatorDocument, AgilityDocument, CommandDocument, CoordinatorMessage, CoverageDocument,
+    GuidanceDocument, MissionDocument, OriginDocument, PoseDocument, RegionDocument, RegionInput,
+    RiskDocument, RiskObjectDocument, RiskObjectInput, SafetyDocument, SnapshotDocument,
+    VesselStatusDocument,
 };
 use crate::recorder::messages::{EventKind, EventRecord};
 use crate::recorder::{Entry as RecorderEntry, MissionClock, Recorder};
@@ -193,6 +194,8 @@ pub enum Request {
         /// The vessel can thrust astern (its hello's `astern`, default
         /// true); without, its guidance is ahead only.
         astern: bool,
+        /// The command rates it can follow (its hello's `agility`).
+        agility: Option<AgilityDocument>,
         tx: mpsc::Sender<Outgoing>,
         /// The link's newest pose. A slot rather than a request per pose:
         /// the tick only ever wants the newest, and 1000 vessels at 20 Hz
@@ -709,11 +712,29 @@ impl Coordinator {
                 link,
                 actuator,
                 astern,
+                agility,
                 tx,
                 poses,
                 reply,
             } => {
                 let actuator = actuator.unwrap_or(self.mission.actuator);
+                let agility = match agility {
+                    None => Agility::UNDECLARED,
+                    Some(a) => {
+                        let ok = |x: f64| x.is_finite() && x > 0.0;
+                        if !(ok(a.yaw_accel) && ok(a.surge_accel)) {
+                            let _ = reply.send(Err(ApiError::Invalid(
+                                "agility: yaw_accel and surge_accel must be finite numbers > 0"
+                                    .into(),
+                            )));
+                            return false;
+                        }
+                        Agility {
+                            yaw_accel: a.yaw_accel,
+                            surge_accel: a.surge_accel,
+                        }
+                    }
+                };
                 if !(actuator.k.is_finite() && actuator.k > 0.0) {
                     let _ = reply.send(Err(ApiError::Invalid(
                         "actuator.k: must be a finite number > 0".into(),
@@ -756,6 +777,7 @@ impl Coordinator {
                 }
                 entry.actuator = actuator;
                 entry.guidance.ahead_only = !astern;
+                entry.guidance.agility = agility;
                 entry.link = Some(Link {
                     id: link,
                     tx,
@@ -1163,6 +1185,7 @@ mod tests {
             link,
             actuator: None,
             astern: true,
+            agility: None,
             tx,
             poses,
             reply,

@@ -151,13 +151,14 @@ async fn run_link(mut socket: WebSocket, app: AppState, peer: Option<SocketAddr>
         _ = app.shutdown.cancelled() => return,
         first = tokio::time::timeout(Duration::from_secs(10), socket.recv()) => first,
     };
-    let (id, actuator, astern) = match hello {
+    let (id, actuator, astern, agility) = match hello {
         Ok(Some(Ok(Message::Text(t)))) => match parse(&t) {
             Ok(VesselMessage::Hello {
                 vessel,
                 protocol,
                 actuator,
                 astern,
+                agility,
             }) => {
                 if protocol != 1 {
                     return refuse(
@@ -185,7 +186,7 @@ async fn run_link(mut socket: WebSocket, app: AppState, peer: Option<SocketAddr>
                     )
                     .await;
                 }
-                (vessel, actuator, astern)
+                (vessel, actuator, astern, agility)
             }
             Ok(VesselMessage::Pose(_)) => {
                 return refuse(
@@ -222,6 +223,7 @@ async fn run_link(mut socket: WebSocket, app: AppState, peer: Option<SocketAddr>
             link,
             actuator,
             astern: astern.unwrap_or(true),
+            agility,
             tx,
             poses,
             reply: reply_tx,

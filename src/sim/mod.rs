@@ -29,7 +29,7 @@ use crate::control::disturbance::{Disturbance, Gusts};
 use crate::control::guidance::{Command, Guidance, GuidanceGains};
 use crate::control::model::{State, VesselParams, step};
 use crate::control::observer::{Observer, ObserverGains};
-use crate::control::reference::{Governor, Line, Peaks};
+use crate::control::reference::{Governor, Line, Peaks, agility};
 use crate::control::safety::{SafetyLayer, SafetyParams};
 use crate::control::{Vec3, lloyd};
 use crate::coverage::{CellGeometry, Fleet, Options, Vessel, evaluate};
@@ -381,7 +381,15 @@ pub fn run(config: &Config, mut progress: impl FnMut(f64)) -> Result<Run, SimErr
     let mut observers: Vec<Observer> = (0..n)
         .map(|_| Observer::new(config.vessel, observer_gains))
         .collect();
-    let mut guidance: Vec<Guidance> = (0..n).map(|_| Guidance::new(config.guidance)).collect();
+    // Each simulated vessel declares what its governor can follow, as the
+    // networked one does in its hello.
+    let mut guidance: Vec<Guidance> = (0..n)
+        .map(|_| {
+            let mut g = Guidance::new(config.guidance);
+            g.agility = agility(&config.vessel);
+            g
+        })
+        .collect();
     let layer = SafetyLayer::new(region, config.safety)
         .map_err(|e| SimError::Scenario(crate::scenario::ScenarioError::Input(e)))?;
     let mut monitor = Monitor::new(

@@ -365,6 +365,10 @@ fn route(
             // SET_POSITION_TARGET gives Rover a speed, never a direction
             // of thrust: it cannot be told to go astern.
             astern: Some(false),
+            // The autopilot bounds its own targets (ATC_STR_ACC_MAX,
+            // ATC_ACCEL_MAX); the mission's yaw_accel is the former's
+            // default, so there is nothing tighter to declare.
+            agility: None,
         },
         rx,
         frame.clone(),
