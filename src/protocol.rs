@@ -437,7 +437,9 @@ pub struct ActuatorDocument {
 pub struct AgilityDocument {
     /// Largest |ṙ_d| [rad/s²], > 0.
     pub yaw_accel: f64,
-    /// Largest |u̇_d| [m/s²], > 0.
+    /// Largest |u̇_d − v r| [m/s²], > 0: what the vessel's actuators add
+    /// to the rate its surge changes at unforced while it turns (v r, the
+    /// rigid-body Coriolis term, from its own poses' sway and yaw rate).
     pub surge_accel: f64,
 }
 
@@ -461,9 +463,9 @@ pub enum VesselMessage {
         #[serde(default, skip_serializing_if = "Option::is_none")]
         astern: Option<bool>,
         /// The command rates the vessel can follow. Omitted: the mission's
-        /// `yaw_accel` and `surge_accel` alone; declared: its commands change
-        /// no faster than the smaller of the two. The simulated vessel
-        /// declares its reference governor's share of its actuators.
+        /// `yaw_accel` and `surge_accel` alone; declared: its commands also
+        /// keep within these. The simulated vessel declares its reference
+        /// governor's share of its actuators.
         #[serde(default, skip_serializing_if = "Option::is_none")]
         agility: Option<AgilityDocument>,
     },

@@ -119,13 +119,19 @@ fn runs_are_deterministic_for_a_seed() {
     }
 }
 
-/// Issue 17's figures on the paper scenario, 200 s: after 20 s every vessel
-/// tracks the reference its controller is given to within 0.05 (m/s,
-/// rad/s), ends within 0.2 m of its centroid with H within 0.1 % of Lloyd's,
-/// and the observer's error after 10 s stays below 0.005.
-fn the_papers_claims_hold(name: &str, safety: &str) {
+/// Issue 17's figures on the paper scenario, 200 s, with `args` (preset,
+/// disturbance, safety): after 20 s every vessel tracks the reference its
+/// controller is given to within 0.05 (m/s, rad/s), and the coordinator's
+/// command itself (tracking error plus how far that reference lags the
+/// command) as well; it ends within 0.2 m of its centroid with H within
+/// 0.1 % of Lloyd's. Under the paper's disturbance and the gusts the
+/// observer's error after 10 s stays below 0.005 too (a current fixed in
+/// the earth frame changes, seen from a turning hull, as fast as the hull
+/// turns: the observer's error under it, 0.008 N of 15, is documented,
+/// not bounded here).
+fn the_papers_claims_hold(name: &str, args: &[&str]) {
     let out = tmp(name);
-    let s = sim(&out, &["--safety", safety, "--no-figures"]);
+    let s = sim(&out, &[args, &["--no-figures"]].concat());
     let e = s["E_max_end"].as_f64().unwrap();
     let (h, lloyd) = (
         s["H_end"].as_f64().unwrap(),
@@ -133,25 +139,43 @@ fn the_papers_claims_hold(name: &str, safety: &str) {
     );
     assert!(e < 0.2, "E_max at the end {e}");
     assert!((h - lloyd).abs() < 1e-3 * lloyd, "H {h} vs Lloyd {lloyd}");
-    let tracking = &s["velocity_error_max_after_20s"];
-    let (u, r) = (
-        tracking["u"].as_f64().unwrap(),
-        tracking["r"].as_f64().unwrap(),
-    );
+    let pair = |key: &str| {
+        let v = &s[key];
+        (v["u"].as_f64().unwrap(), v["r"].as_f64().unwrap())
+    };
+    let (u, r) = pair("velocity_error_max_after_20s");
     assert!(u < 0.05 && r < 0.05, "tracking after 20 s: u {u}, r {r}");
-    let observer = s["observer_error_max_after_10s"].as_f64().unwrap();
-    assert!(observer < 0.005, "observer error after 10 s {observer}");
+    let (lag_u, lag_r) = pair("command_lag_max_after_20s");
+    assert!(
+        u + lag_u < 0.05 && r + lag_r < 0.05,
+        "against the command after 20 s: u {u} + {lag_u}, r {r} + {lag_r}"
+    );
+    if !args.contains(&"current") {
+        let observer = s["observer_error_max_after_10s"].as_f64().unwrap();
+        assert!(observer < 0.005, "observer error after 10 s {observer}");
+    }
     std::fs::remove_dir_all(out).unwrap();
 }
 
 #[test]
 fn course_guidance_converges_and_tracks_on_the_papers_vessel() {
-    the_papers_claims_hold("course", "on");
+    the_papers_claims_hold("course", &["--safety", "on"]);
 }
 
 #[test]
 fn the_papers_own_pipeline_converges_and_tracks() {
-    the_papers_claims_hold("course-none", "none");
+    the_papers_claims_hold("course-none", &["--safety", "none"]);
+}
+
+#[test]
+fn the_claims_hold_for_the_otter_and_other_disturbances() {
+    for (name, args) in [
+        ("otter", ["--preset", "otter", "--safety", "none"]),
+        ("gusts", ["--disturbance", "gusts", "--safety", "none"]),
+        ("current", ["--disturbance", "current", "--safety", "none"]),
+    ] {
+        the_papers_claims_hold(name, &args);
+    }
 }
 
 #[test]

@@ -54,7 +54,9 @@
 //!   `yaw_accel` and u̇_d by `surge_accel` (the raw u̇_d of the turning bow
 //!   fed forward), as ArduPilot bounds its steering and speed targets, and
 //!   by the vessel's own [`Agility`] where it declared one (a hull with less
-//!   authority than the mission's bounds is asked only for what it can do);
+//!   authority than the mission's bounds is asked only for what it can do;
+//!   its surge bound is taken around v r, the rate its surge changes at
+//!   unforced, where the mission's is absolute);
 //! - never leaves ±`max_yaw_rate` nor the safety filter's surge interval:
 //!   that bound is a constraint, and where it moves past the line the line
 //!   jumps to it (the filter's intervention, the one step left).
@@ -154,13 +156,14 @@ impl Default for GuidanceGains {
 /// The command rates one vessel can follow, as it declares them (the
 /// simulated vessel: its reference governor's share of its actuators,
 /// [`reference::agility`](super::reference::agility)). The `course` mode
-/// bounds that vessel's ṙ_d and u̇_d by the smaller of these and the
-/// mission's `yaw_accel`, `surge_accel`.
+/// bounds that vessel's ṙ_d and u̇_d by these as well as by the mission's
+/// `yaw_accel`, `surge_accel`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Agility {
-    /// [rad/s²]
+    /// |ṙ_d| [rad/s²]
     pub yaw_accel: f64,
-    /// [m/s²]
+    /// |u̇_d − v r| [m/s²]: what the actuators add to the surge's own rate
+    /// of change in a turn.
     pub surge_accel: f64,
 }
 
@@ -332,7 +335,23 @@ impl Guidance {
     ) -> (f64, f64, f64, f64, f64) {
         let g = self.gains;
         let yaw_accel = g.yaw_accel.min(self.agility.yaw_accel);
-        let surge_accel = g.surge_accel.min(self.agility.surge_accel);
+        // A declared surge agility is the actuators' share, and actuators
+        // change the surge relative to what the hull does unforced: a body
+        // turning at r with sway v has its surge change at v r with no force
+        // at all (the rigid-body Coriolis term; all of it for the paper's
+        // hull, m11 = m22). Going astern in a hard turn that is more than
+        // the actuators can hold, so the agility bounds u̇_d around v r, not
+        // around zero; the mission's bound, like ArduPilot's, stays absolute
+        // and gives way where the two do not meet (the hull's physics wins).
+        let natural = match state.vel.y * state.vel.z {
+            // A pose too wild for the product is bounded by the mission's alone.
+            x if x.is_finite() => x,
+            _ => 0.0,
+        };
+        let agile = (
+            natural - self.agility.surge_accel,
+            natural + self.agility.surge_accel,
+        );
         let (lo, hi) = if self.ahead_only {
             (surge.0.max(0.0), surge.1.max(0.0))
         } else {
@@ -357,7 +376,8 @@ impl Guidance {
         // Reach the law's output by the next command if the rate bounds
         // allow (u's own rate fed forward), never leaving the bounds.
         let u_dot = (raw_u_dot + (bounded_u - u) / period)
-            .clamp(-surge_accel, surge_accel)
+            .clamp(-g.surge_accel, g.surge_accel)
+            .clamp(agile.0, agile.1)
             .max((lo - u) / period)
             .min((hi - u) / period);
         let r_dot = ((raw_r - r) / period).clamp(-yaw_accel, yaw_accel).clamp(
@@ -671,6 +691,44 @@ mod tests {
             (nimble_peak - gains.yaw_accel).abs() < 1e-12,
             "{nimble_peak}"
         );
+    }
+
+    /// The paper's run without the filter, t = 20.9 s: usv-8 going astern
+    /// at 0.41 m/s with 1 m/s of sway to starboard, turning at 0.92 rad/s.
+    /// Unforced, its surge falls at v r = −0.93 m/s²; its actuators' share
+    /// (0.75 m/s²) cannot make it rise. Bounded around zero, the command
+    /// asked for +0.75 m/s² and the vessel's governor fell 0.075 m/s behind.
+    #[test]
+    fn a_declared_surge_agility_bounds_the_rate_around_the_hulls_own() {
+        let agility = Agility {
+            yaw_accel: 0.75,
+            surge_accel: 0.75,
+        };
+        let s = State {
+            x: 0.0,
+            y: 0.0,
+            psi: 0.0,
+            vel: Vec3::new(-0.41, -1.0, 0.925),
+        };
+        let natural = s.vel.y * s.vel.z;
+        // Goal ahead, bow nearly along the velocity change: the law wants
+        // the surge to rise from astern to ahead.
+        let goal = (10.0, 0.0);
+        let mut g = Guidance::new(GuidanceGains::default());
+        g.agility = agility;
+        let mut free = Guidance::new(GuidanceGains::default());
+        for k in 0..5 {
+            let t = 0.1 * k as f64;
+            let c = g.update(t, &s, goal);
+            assert!(
+                (c.u_d_dot - natural).abs() <= agility.surge_accel + 1e-12,
+                "{c:?}"
+            );
+            // A vessel that declared nothing is bounded by the mission's
+            // 0.75 m/s² around zero, and asked for more than the hull can.
+            let f = free.update(t, &s, goal);
+            assert!(f.u_d_dot > natural + agility.surge_accel, "{f:?}");
+        }
     }
 
     #[test]
