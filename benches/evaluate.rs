@@ -9,7 +9,7 @@ use std::time::Duration;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use seacover::coverage::Options;
-use seacover::scenario::{Scenario, parse_document};
+use seacover::mission::scenario::{Scenario, parse_document};
 
 fn load(name: &str) -> Scenario {
     let path = format!("{}/examples/{name}.json", env!("CARGO_MANIFEST_DIR"));

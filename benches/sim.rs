@@ -32,8 +32,8 @@ fn safety_tick(c: &mut Criterion) {
     use seacover::coverage::Options;
     let path = format!("{}/examples/fleet-1000.json", env!("CARGO_MANIFEST_DIR"));
     let text = std::fs::read_to_string(path).expect("scenario file");
-    let doc = seacover::scenario::parse_document(&text).expect("parses");
-    let scenario = seacover::scenario::Scenario::from_document(&doc).expect("valid");
+    let doc = seacover::mission::scenario::parse_document(&text).expect("parses");
+    let scenario = seacover::mission::scenario::Scenario::from_document(&doc).expect("valid");
     let eval = scenario.evaluate(&Options::default());
     let states: Vec<State> = scenario
         .fleet

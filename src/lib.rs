@@ -17,14 +17,12 @@
 //!   read back (replay, `seacover record`).
 
 pub mod agent;
-pub mod control;
-pub mod coverage;
 pub mod demo;
-pub mod geometry;
-pub mod georef;
 pub mod load;
+pub mod mission;
 pub mod protocol;
 pub mod recorder;
-pub mod scenario;
 pub mod server;
 pub mod sim;
+
+pub use seacover_engine::{control, coverage, geometry};

@@ -1,7 +1,7 @@
 //! Serde types of everything that crosses the wire or the command line
-//! (SPEC §3), and nothing else: no validation, no behaviour. Validation lives in
-//! [`crate::scenario`], so the same document is checked the same way by the CLI
-//! and by the server.
+//! (SPEC §3), and nothing else: no validation, no behaviour. Validation lives
+//! in the mission layer above (`mission::scenario`), so the same document is
+//! checked the same way by the CLI and by the server.
 //!
 //! The types also derive their schemas: `utoipa::ToSchema` for the OpenAPI
 //! document (`api/openapi.json`) and `schemars::JsonSchema` for the vessel
@@ -9,7 +9,7 @@
 //! attributes, so the schemas follow the JSON that serde accepts and emits.
 //! Schemas describe shapes only: value rules (ids matching
 //! `[A-Za-z0-9_.-]{1,64}`, σ > 0, simple polygons, …) are checked by
-//! [`crate::scenario`] and answered with `invalid`.
+//! `mission::scenario` and answered with `invalid`.
 
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
@@ -21,8 +21,8 @@ pub type XY = [f64; 2];
 /// A scenario document (`examples/*.json`), as `seacover evaluate` and
 /// `POST /api/v1/coverage/evaluate` read it. With an origin, its region may
 /// be GeoJSON and its risk objects and vessels may be placed by `lat` and
-/// `lon` instead of `x` and `y`; [`crate::scenario`] converts them to the
-/// local plane.
+/// `lon` instead of `x` and `y`; the mission layer (`mission::scenario`)
+/// converts them to the local plane.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
 pub struct ScenarioDocument {
     /// A label; ignored by the engine.
@@ -736,4 +736,11 @@ mod schema {
             "The cell's outer ring; `null` when the vessel has no cell.",
         ))
     }
+}
+
+/// `PUT /api/v1/mission/risk/base` body: the new base density φ0.
+#[derive(Serialize, Deserialize, ToSchema)]
+pub struct RiskBaseDocument {
+    /// φ0 ≥ 0.
+    pub value: f64,
 }

@@ -7,7 +7,7 @@
 
 use libfuzzer_sys::fuzz_target;
 use seacover::coverage::Options;
-use seacover::scenario::evaluate_text;
+use seacover::mission::scenario::evaluate_text;
 
 fuzz_target!(|data: &[u8]| {
     // Bounds the work per input: 64 KiB is a few hundred vessels or a ring

@@ -72,20 +72,87 @@ pub fn link_url(server: &str) -> Option<String> {
     Some(format!("{ws}/api/v1/vessels/link"))
 }
 
+/// A coordinator link's WebSocket.
+pub type Socket =
+    tokio_tungstenite::WebSocketStream<tokio_tungstenite::MaybeTlsStream<tokio::net::TcpStream>>;
+
+/// The upgrade request of a link to `url`, with the bearer token when there
+/// is one.
 fn request(
-    config: &LinkConfig,
+    url: &str,
+    token: Option<&str>,
 ) -> Result<
     tokio_tungstenite::tungstenite::handshake::client::Request,
     tokio_tungstenite::tungstenite::Error,
 > {
     use tokio_tungstenite::tungstenite::client::IntoClientRequest;
-    let mut request = config.url.as_str().into_client_request()?;
-    if let Some(token) = &config.token
+    let mut request = url.into_client_request()?;
+    if let Some(token) = token
         && let Ok(value) = format!("Bearer {token}").parse()
     {
         request.headers_mut().insert("authorization", value);
     }
     Ok(request)
+}
+
+/// Why a link's handshake failed.
+#[derive(Debug, thiserror::Error)]
+pub enum HandshakeError {
+    #[error("bad link URL: {0}")]
+    Url(#[source] tokio_tungstenite::tungstenite::Error),
+    #[error("connecting: {0}")]
+    Connect(#[source] tokio_tungstenite::tungstenite::Error),
+    #[error("sending hello: {0}")]
+    Hello(#[source] tokio_tungstenite::tungstenite::Error),
+    #[error("refused: {code}: {message}")]
+    Refused { code: String, message: String },
+    #[error("a command before the welcome")]
+    EarlyCommand,
+    #[error("unreadable frame: {0}")]
+    Unreadable(String),
+    #[error("closed before the welcome")]
+    Closed,
+    #[error("before the welcome: {0}")]
+    Transport(#[source] tokio_tungstenite::tungstenite::Error),
+}
+
+/// Connects to `url` (with the bearer token), says `hello` and waits for the
+/// coordinator's welcome: the handshake of every vessel link, simulated,
+/// bridged or the load client's.
+pub async fn handshake(
+    url: &str,
+    token: Option<&str>,
+    hello: &VesselMessage,
+) -> Result<Socket, HandshakeError> {
+    let request = request(url, token).map_err(HandshakeError::Url)?;
+    // Small frames both ways: send each at once rather than waiting for
+    // the previous one's acknowledgement (no Nagle), and a small read
+    // buffer (tungstenite zero-fills all of it, 128 KiB by default; 1000
+    // links of the load client would hold 128 MiB).
+    let config = tokio_tungstenite::tungstenite::protocol::WebSocketConfig::default()
+        .read_buffer_size(4 * 1024);
+    let (mut socket, _) = tokio_tungstenite::connect_async_with_config(request, Some(config), true)
+        .await
+        .map_err(HandshakeError::Connect)?;
+    socket
+        .send(text(hello))
+        .await
+        .map_err(HandshakeError::Hello)?;
+    loop {
+        match socket.next().await {
+            Some(Ok(Message::Text(t))) => match serde_json::from_str::<CoordinatorMessage>(&t) {
+                Ok(CoordinatorMessage::Welcome { .. }) => return Ok(socket),
+                Ok(CoordinatorMessage::Error { code, message }) => {
+                    return Err(HandshakeError::Refused { code, message });
+                }
+                Ok(CoordinatorMessage::Command(_)) => return Err(HandshakeError::EarlyCommand),
+                Err(e) => return Err(HandshakeError::Unreadable(e.to_string())),
+            },
+            Some(Ok(Message::Close(_))) | None => return Err(HandshakeError::Closed),
+            Some(Err(e)) => return Err(HandshakeError::Transport(e)),
+            Some(Ok(_)) => {}
+        }
+    }
 }
 
 fn text<T: serde::Serialize>(value: &T) -> Message {
@@ -102,28 +169,10 @@ pub async fn run(
     let mut rng = ChaCha8Rng::seed_from_u64(config.seed);
     let mut backoff = Duration::from_millis(100);
     while !shutdown.is_cancelled() {
-        let request = match request(&config) {
-            Ok(r) => r,
-            Err(e) => {
-                tracing::error!(url = %config.url, error = %e, "bad coordinator URL");
-                return;
-            }
-        };
-        let connected = tokio::select! {
-            _ = shutdown.cancelled() => return,
-            c = tokio_tungstenite::connect_async(request) => c,
-        };
-        let Ok((socket, _)) = connected else {
-            let wait = backoff.mul_f64(rng.random_range(0.5..1.5));
-            tokio::select! {
-                _ = shutdown.cancelled() => return,
-                _ = tokio::time::sleep(wait) => {}
-            }
-            backoff = (backoff * 2).min(Duration::from_secs(5));
-            continue;
-        };
-        backoff = Duration::from_millis(100);
-        let (mut sink, mut stream) = socket.split();
+        if let Err(e) = request(&config.url, config.token.as_deref()) {
+            tracing::error!(url = %config.url, error = %e, "bad coordinator URL");
+            return;
+        }
         let hello = VesselMessage::Hello {
             vessel: config.vessel.clone(),
             protocol: 1,
@@ -131,9 +180,27 @@ pub async fn run(
             astern: config.astern,
             agility: config.agility,
         };
-        if sink.send(text(&hello)).await.is_err() {
-            continue;
-        }
+        let connected = tokio::select! {
+            _ = shutdown.cancelled() => return,
+            c = handshake(&config.url, config.token.as_deref(), &hello) => c,
+        };
+        let socket = match connected {
+            Ok(socket) => socket,
+            Err(e) => {
+                if let HandshakeError::Refused { code, message } = &e {
+                    tracing::warn!(vessel = %config.vessel, %code, %message, "coordinator error");
+                }
+                let wait = backoff.mul_f64(rng.random_range(0.5..1.5));
+                tokio::select! {
+                    _ = shutdown.cancelled() => return,
+                    _ = tokio::time::sleep(wait) => {}
+                }
+                backoff = (backoff * 2).min(Duration::from_secs(5));
+                continue;
+            }
+        };
+        backoff = Duration::from_millis(100);
+        let (mut sink, mut stream) = socket.split();
         // The pose current at connection goes out at once, not only the
         // next one.
         poses.mark_changed();

@@ -61,8 +61,8 @@ pub struct AgentConfig {
 
 /// Starts from the built-in paper scenario (ids usv-1 … usv-8).
 pub fn paper_vessels(params: VesselParams) -> Vec<VesselConfig> {
-    let doc =
-        crate::scenario::parse_document(crate::sim::PAPER_SCENARIO).expect("built-in scenario");
+    let doc = crate::mission::scenario::parse_document(crate::mission::PAPER_SCENARIO)
+        .expect("built-in scenario");
     doc.vessels
         .iter()
         .enumerate()
@@ -103,6 +103,55 @@ pub fn random_vessels(
             params,
         })
         .collect()
+}
+
+/// Why a fleet of simulated vessels could not be made.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum FleetError {
+    #[error("--vessels must be in [1, 10000]")]
+    Count,
+    #[error("--id must match [A-Za-z0-9_.-]{{1,64}}")]
+    Id,
+}
+
+/// The fleet `seacover agent` runs: `n` vessels, the first eight at the
+/// paper's starts (usv-1 … usv-8), further ones (usv-9 …) at seeded random
+/// starts in the paper's region; or, with `id`, one vessel of that id at the
+/// paper's first start.
+pub fn fleet(
+    n: usize,
+    id: Option<String>,
+    params: VesselParams,
+    seed: u64,
+) -> Result<Vec<VesselConfig>, FleetError> {
+    if !(1..=crate::coverage::fleet::MAX_VESSELS).contains(&n) {
+        return Err(FleetError::Count);
+    }
+    let mut vessels = paper_vessels(params);
+    if n > vessels.len() {
+        let extra = random_vessels(
+            "usv",
+            n - vessels.len(),
+            (0.0, 0.0),
+            (100.0, 100.0),
+            seed,
+            params,
+        );
+        vessels.extend(extra.into_iter().enumerate().map(|(i, mut v)| {
+            v.id = format!("usv-{}", 9 + i);
+            v.index = 9 + i;
+            v
+        }));
+    }
+    vessels.truncate(n);
+    if let Some(id) = id {
+        if !crate::mission::scenario::valid_id(&id) {
+            return Err(FleetError::Id);
+        }
+        vessels.truncate(1);
+        vessels[0].id = id;
+    }
+    Ok(vessels)
 }
 
 /// The on-board simulation of one vessel.

@@ -22,107 +22,22 @@
 //! - `seacover sim` records with a blocking hand-over instead, so that the
 //!   same seed gives the same messages.
 
+mod entry;
 pub mod inspect;
 pub mod messages;
 pub mod reader;
 pub mod writer;
 
-use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::mpsc::{SyncSender, TrySendError};
-use std::time::{Duration, Instant};
 
-use crate::protocol::{MissionDocument, PoseDocument, Snapshot};
-use messages::{EventRecord, SimVesselRecord};
-
-/// Entries dropped because the writer was behind or stopped.
-pub const DROPPED: &str = "seacover_recording_dropped_total";
-/// Recording errors (each stops the recording).
-pub const ERRORS: &str = "seacover_recording_errors_total";
-/// 1 while a recording is being written, 0 otherwise.
-pub const ACTIVE: &str = "seacover_recording_active";
-/// Bytes written to recordings.
-pub const BYTES: &str = "seacover_recording_bytes_total";
+use crate::protocol::{MissionDocument, PoseDocument};
+pub use entry::{ACTIVE, BYTES, DROPPED, ERRORS, Entry, RecorderConfig, Target};
+use messages::EventRecord;
 
 /// Entries the hand-over holds: about two seconds of a 1000-vessel fleet's
 /// poses (20 Hz) and ticks.
 const CAPACITY: usize = 65_536;
-
-/// Where and how a recording is written.
-#[derive(Debug, Clone)]
-pub struct RecorderConfig {
-    pub target: Target,
-    /// Publish times from the wall clock (the coordinator) or equal to the
-    /// log times (the simulator, so that a seed gives the same messages).
-    pub wall_clock: bool,
-}
-
-/// Where recordings go.
-#[derive(Debug, Clone)]
-pub enum Target {
-    /// `DIR/<UTC start>.mcap`, a new file after `max_bytes` or `max_duration`
-    /// (wall clock).
-    Directory {
-        dir: PathBuf,
-        max_bytes: u64,
-        max_duration: Duration,
-    },
-    /// One file, never rotated (`seacover sim --record FILE`).
-    File(PathBuf),
-}
-
-/// What the recorder is handed.
-#[derive(Debug)]
-pub enum Entry {
-    /// A pose as the coordinator received it, at mission time `time`.
-    Pose {
-        vessel: Arc<str>,
-        time: f64,
-        pose: PoseDocument,
-    },
-    /// A published snapshot. Each new tick's coverage, commands and, for
-    /// geo-referenced missions, map channels are recorded from it; a
-    /// snapshot of a tick already recorded (one published by a mission
-    /// change) adds nothing.
-    Tick(Arc<Snapshot>),
-    /// The whole mission, at start and after each accepted change.
-    Mission {
-        time: f64,
-        mission: Box<MissionDocument>,
-    },
-    Event(EventRecord),
-    /// `seacover sim`: a vessel's truth, disturbance and estimate.
-    SimVessel(SimVesselRecord),
-    /// Finish the file and stop.
-    Finish,
-}
-
-/// The coordinator's mission clock: mission time is wall time since the
-/// clock's origin, times the time warp; tick N is due when it reads
-/// N / tick_hz.
-#[derive(Debug, Clone, Copy)]
-pub struct MissionClock {
-    pub origin: Instant,
-    pub warp: f64,
-}
-
-impl MissionClock {
-    /// A clock whose first tick (tick 1, due one period after the origin)
-    /// is due now.
-    pub fn first_tick_now(warp: f64, tick_hz: f64) -> MissionClock {
-        let period = Duration::from_secs_f64(1.0 / (tick_hz * warp));
-        let now = Instant::now();
-        MissionClock {
-            origin: now.checked_sub(period).unwrap_or(now),
-            warp,
-        }
-    }
-
-    /// Mission time now [s].
-    pub fn now(&self) -> f64 {
-        self.origin.elapsed().as_secs_f64() * self.warp
-    }
-}
 
 /// The hand-over to the writer thread; cheap to clone. A recorder that is
 /// off takes everything and does nothing.

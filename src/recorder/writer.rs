@@ -478,7 +478,7 @@ impl Writer {
         let Some(frame) = doc
             .mission
             .origin
-            .and_then(|o| crate::server::state::origin_frame(o).ok())
+            .and_then(|o| crate::mission::origin_frame(o).ok())
         else {
             return Ok(());
         };
@@ -502,8 +502,11 @@ impl Writer {
             let topic = format!("{}{}", messages::MAP_FIX_PREFIX, v.id);
             self.put(&topic, messages::spec::<LocationFix>, log, &fix)?;
         }
-        let collection =
-            crate::georef::output::coverage(&frame, &snapshot.coverage.cells, &doc.vessels);
+        let collection = crate::mission::georef::output::coverage(
+            &frame,
+            &snapshot.coverage.cells,
+            &doc.vessels,
+        );
         let geojson = GeoJson {
             geojson: collection.to_string(),
         };

@@ -6,18 +6,18 @@ use axum::body::Bytes;
 use axum::extract::{Path, State};
 use axum::http::StatusCode;
 use axum::response::{IntoResponse, Response};
-use serde::Deserialize;
 use tokio::sync::oneshot;
 
 use super::AppState;
+use super::coordinator::Request;
 use super::error::ApiError;
-use super::state::{ChangeResult, MissionChange, Request};
 use crate::coverage::Options;
+use crate::mission::scenario::{Scenario, evaluation_document, localize, parse_input};
+use crate::mission::{ChangeResult, MissionChange};
 use crate::protocol::{
     CoverageDocument, EvaluationDocument, MissionDocument, OriginDocument, RegionInput,
     RiskObjectDocument, RiskObjectInput, VesselStatusDocument,
 };
-use crate::scenario::{Scenario, evaluation_document, localize, parse_input};
 
 /// Liveness: `ok` while the server answers.
 #[utoipa::path(
@@ -71,7 +71,7 @@ pub async fn vessels(State(app): State<AppState>) -> Json<Vec<VesselStatusDocume
     params(("id" = String, Path, description = "The vessel's id.")),
     responses(
         (status = 200, description = "The vessel.", body = VesselStatusDocument),
-        (status = 404, response = super::openapi::NotFound),
+        (status = 404, response = super::responses::NotFound),
     ),
 )]
 pub async fn vessel(
@@ -97,10 +97,10 @@ pub async fn vessel(
     params(("id" = String, Path, description = "The vessel's id.")),
     responses(
         (status = 204, description = "Forgotten; its link, if any, got an `error` frame with code `removed` and was closed."),
-        (status = 401, response = super::openapi::Unauthorized),
-        (status = 404, response = super::openapi::NotFound),
-        (status = 429, response = super::openapi::RateLimited),
-        (status = 503, response = super::openapi::ShuttingDown),
+        (status = 401, response = super::responses::Unauthorized),
+        (status = 404, response = super::responses::NotFound),
+        (status = 429, response = super::responses::RateLimited),
+        (status = 503, response = super::responses::ShuttingDown),
     ),
     security(("bearer" = [])),
 )]
@@ -147,7 +147,7 @@ pub async fn coverage(State(app): State<AppState>) -> Json<CoverageDocument> {
 pub async fn coverage_geojson(State(app): State<AppState>) -> Result<Response, ApiError> {
     let snap = app.snapshot.borrow().clone();
     let frame = match snap.document.mission.origin {
-        Some(origin) => super::state::origin_frame(origin)?,
+        Some(origin) => crate::mission::origin_frame(origin)?,
         None => {
             return Err(ApiError::NotFound(
                 "the mission has no origin, so its partition has no place on the globe: \
@@ -156,8 +156,11 @@ pub async fn coverage_geojson(State(app): State<AppState>) -> Result<Response, A
             ));
         }
     };
-    let collection =
-        crate::georef::output::coverage(&frame, &snap.coverage.cells, &snap.document.vessels);
+    let collection = crate::mission::georef::output::coverage(
+        &frame,
+        &snap.coverage.cells,
+        &snap.document.vessels,
+    );
     let body = serde_json::to_string(&collection).expect("GeoJSON serializes");
     Ok((
         [(axum::http::header::CONTENT_TYPE, "application/geo+json")],
@@ -180,10 +183,10 @@ pub async fn coverage_geojson(State(app): State<AppState>) -> Result<Response, A
     request_body = crate::protocol::ScenarioDocument,
     responses(
         (status = 200, description = "The evaluation, cells in the order of the request's vessels.", body = EvaluationDocument),
-        (status = 400, response = super::openapi::Malformed),
-        (status = 413, response = super::openapi::TooLarge),
-        (status = 422, response = super::openapi::Invalid),
-        (status = 503, response = super::openapi::ShuttingDown),
+        (status = 400, response = super::responses::Malformed),
+        (status = 413, response = super::responses::TooLarge),
+        (status = 422, response = super::responses::Invalid),
+        (status = 503, response = super::responses::ShuttingDown),
     ),
 )]
 pub async fn evaluate(
@@ -251,13 +254,13 @@ fn respond(status: StatusCode, result: ChangeResult) -> Response {
     request_body = OriginDocument,
     responses(
         (status = 200, description = "The mission with the new origin, once durable.", body = MissionDocument),
-        (status = 400, response = super::openapi::Malformed),
-        (status = 401, response = super::openapi::Unauthorized),
-        (status = 413, response = super::openapi::TooLarge),
-        (status = 422, response = super::openapi::Invalid),
-        (status = 429, response = super::openapi::RateLimited),
-        (status = 500, response = super::openapi::NotStored),
-        (status = 503, response = super::openapi::ShuttingDown),
+        (status = 400, response = super::responses::Malformed),
+        (status = 401, response = super::responses::Unauthorized),
+        (status = 413, response = super::responses::TooLarge),
+        (status = 422, response = super::responses::Invalid),
+        (status = 429, response = super::responses::RateLimited),
+        (status = 500, response = super::responses::NotStored),
+        (status = 503, response = super::responses::ShuttingDown),
     ),
     security(("bearer" = [])),
 )]
@@ -280,13 +283,13 @@ pub async fn put_origin(State(app): State<AppState>, body: Bytes) -> Result<Resp
     request_body = RegionInput,
     responses(
         (status = 200, description = "The mission with the new region, once durable.", body = MissionDocument),
-        (status = 400, response = super::openapi::Malformed),
-        (status = 401, response = super::openapi::Unauthorized),
-        (status = 413, response = super::openapi::TooLarge),
-        (status = 422, response = super::openapi::Invalid),
-        (status = 429, response = super::openapi::RateLimited),
-        (status = 500, response = super::openapi::NotStored),
-        (status = 503, response = super::openapi::ShuttingDown),
+        (status = 400, response = super::responses::Malformed),
+        (status = 401, response = super::responses::Unauthorized),
+        (status = 413, response = super::responses::TooLarge),
+        (status = 422, response = super::responses::Invalid),
+        (status = 429, response = super::responses::RateLimited),
+        (status = 500, response = super::responses::NotStored),
+        (status = 503, response = super::responses::ShuttingDown),
     ),
     security(("bearer" = [])),
 )]
@@ -298,31 +301,26 @@ pub async fn put_region(State(app): State<AppState>, body: Bytes) -> Result<Resp
     ))
 }
 
-#[derive(Deserialize)]
-struct Value {
-    value: f64,
-}
-
 /// Sets the base risk density φ0.
 #[utoipa::path(
     put,
     path = "/api/v1/mission/risk/base",
     tag = "mission",
-    request_body = super::openapi::RiskBaseDocument,
+    request_body = crate::protocol::RiskBaseDocument,
     responses(
         (status = 200, description = "The mission with the new base density, once durable.", body = MissionDocument),
-        (status = 400, response = super::openapi::Malformed),
-        (status = 401, response = super::openapi::Unauthorized),
-        (status = 413, response = super::openapi::TooLarge),
-        (status = 422, response = super::openapi::Invalid),
-        (status = 429, response = super::openapi::RateLimited),
-        (status = 500, response = super::openapi::NotStored),
-        (status = 503, response = super::openapi::ShuttingDown),
+        (status = 400, response = super::responses::Malformed),
+        (status = 401, response = super::responses::Unauthorized),
+        (status = 413, response = super::responses::TooLarge),
+        (status = 422, response = super::responses::Invalid),
+        (status = 429, response = super::responses::RateLimited),
+        (status = 500, response = super::responses::NotStored),
+        (status = 503, response = super::responses::ShuttingDown),
     ),
     security(("bearer" = [])),
 )]
 pub async fn put_base(State(app): State<AppState>, body: Bytes) -> Result<Response, ApiError> {
-    let v: Value = parse(&body)?;
+    let v: crate::protocol::RiskBaseDocument = parse(&body)?;
     Ok(respond(
         StatusCode::OK,
         change(&app, MissionChange::Base(v.value)).await?,
@@ -340,14 +338,14 @@ pub async fn put_base(State(app): State<AppState>, body: Bytes) -> Result<Respon
     request_body = RiskObjectInput,
     responses(
         (status = 201, description = "The stored object with its id, once durable.", body = RiskObjectDocument),
-        (status = 400, response = super::openapi::Malformed),
-        (status = 401, response = super::openapi::Unauthorized),
-        (status = 409, response = super::openapi::Conflict),
-        (status = 413, response = super::openapi::TooLarge),
-        (status = 422, response = super::openapi::Invalid),
-        (status = 429, response = super::openapi::RateLimited),
-        (status = 500, response = super::openapi::NotStored),
-        (status = 503, response = super::openapi::ShuttingDown),
+        (status = 400, response = super::responses::Malformed),
+        (status = 401, response = super::responses::Unauthorized),
+        (status = 409, response = super::responses::Conflict),
+        (status = 413, response = super::responses::TooLarge),
+        (status = 422, response = super::responses::Invalid),
+        (status = 429, response = super::responses::RateLimited),
+        (status = 500, response = super::responses::NotStored),
+        (status = 503, response = super::responses::ShuttingDown),
     ),
     security(("bearer" = [])),
 )]
@@ -367,7 +365,7 @@ pub async fn post_object(State(app): State<AppState>, body: Bytes) -> Result<Res
     params(("id" = String, Path, description = "The risk object's id.")),
     responses(
         (status = 200, description = "The risk object.", body = RiskObjectDocument),
-        (status = 404, response = super::openapi::NotFound),
+        (status = 404, response = super::responses::NotFound),
     ),
 )]
 pub async fn get_object(
@@ -397,14 +395,14 @@ pub async fn get_object(
     request_body = RiskObjectInput,
     responses(
         (status = 200, description = "The stored object, once durable.", body = RiskObjectDocument),
-        (status = 400, response = super::openapi::Malformed),
-        (status = 401, response = super::openapi::Unauthorized),
-        (status = 404, response = super::openapi::NotFound),
-        (status = 413, response = super::openapi::TooLarge),
-        (status = 422, response = super::openapi::Invalid),
-        (status = 429, response = super::openapi::RateLimited),
-        (status = 500, response = super::openapi::NotStored),
-        (status = 503, response = super::openapi::ShuttingDown),
+        (status = 400, response = super::responses::Malformed),
+        (status = 401, response = super::responses::Unauthorized),
+        (status = 404, response = super::responses::NotFound),
+        (status = 413, response = super::responses::TooLarge),
+        (status = 422, response = super::responses::Invalid),
+        (status = 429, response = super::responses::RateLimited),
+        (status = 500, response = super::responses::NotStored),
+        (status = 503, response = super::responses::ShuttingDown),
     ),
     security(("bearer" = [])),
 )]
@@ -428,11 +426,11 @@ pub async fn put_object(
     params(("id" = String, Path, description = "The risk object's id.")),
     responses(
         (status = 204, description = "Removed, durably."),
-        (status = 401, response = super::openapi::Unauthorized),
-        (status = 404, response = super::openapi::NotFound),
-        (status = 429, response = super::openapi::RateLimited),
-        (status = 500, response = super::openapi::NotStored),
-        (status = 503, response = super::openapi::ShuttingDown),
+        (status = 401, response = super::responses::Unauthorized),
+        (status = 404, response = super::responses::NotFound),
+        (status = 429, response = super::responses::RateLimited),
+        (status = 500, response = super::responses::NotStored),
+        (status = 503, response = super::responses::ShuttingDown),
     ),
     security(("bearer" = [])),
 )]

@@ -9,14 +9,12 @@
 //! nothing. Reads and vessel links are not limited here (links are bounded by
 //! the vessel count, reads by the body limit and the snapshot they share).
 
-use std::num::NonZeroU32;
-
 use axum::extract::{Request, State};
 use axum::middleware::Next;
 use axum::response::{IntoResponse, Response};
 use subtle::ConstantTimeEq;
 
-use super::AppState;
+use super::app::AppState;
 use super::error::ApiError;
 
 fn presented(request: &Request) -> Option<String> {
@@ -47,22 +45,6 @@ pub async fn require_token(State(app): State<AppState>, request: Request, next: 
         }
     }
     next.run(request).await
-}
-
-/// The shared write budget.
-pub struct WriteLimiter {
-    bucket: governor::DefaultDirectRateLimiter,
-    per_second: u32,
-}
-
-/// A bucket refilled at `per_second` that holds `burst` writes.
-pub fn write_limiter(per_second: u32, burst: u32) -> WriteLimiter {
-    let rate = NonZeroU32::new(per_second.max(1)).expect("at least 1");
-    let burst = NonZeroU32::new(burst.max(1)).expect("at least 1");
-    WriteLimiter {
-        bucket: governor::RateLimiter::direct(governor::Quota::per_second(rate).allow_burst(burst)),
-        per_second: rate.get(),
-    }
 }
 
 /// Spends one write from the bucket for every request that is not a GET

@@ -41,7 +41,7 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 
 use super::error::ApiError;
-use super::state::Mission;
+use crate::mission::Mission;
 use crate::protocol::{ActuatorDocument, OriginDocument, RegionDocument, RiskDocument};
 
 /// The file as written: everything optional.
@@ -274,9 +274,10 @@ mod tests {
     fn the_load_benchmark_mission_is_the_fleet_1000_scenario() {
         let s = Settings::parse(include_str!("../../examples/fleet-1000.toml")).unwrap();
         let doc = s.mission.document();
-        let scenario =
-            crate::scenario::parse_document(include_str!("../../examples/fleet-1000.json"))
-                .unwrap();
+        let scenario = crate::mission::scenario::parse_document(include_str!(
+            "../../examples/fleet-1000.json"
+        ))
+        .unwrap();
         assert_eq!(Some(doc.region), scenario.region);
         // The mission names its objects; the scenario leaves them unnamed.
         let mut risk = doc.risk;

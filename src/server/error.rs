@@ -5,8 +5,18 @@ use axum::Json;
 use axum::http::StatusCode;
 use axum::response::{IntoResponse, Response};
 
+use crate::mission::MissionError;
+use crate::mission::scenario::ScenarioError;
 use crate::protocol::{ErrorDetail, ErrorDocument};
-use crate::scenario::ScenarioError;
+
+/// Largest request body accepted; a larger one is answered `too_large`.
+pub const MAX_BODY: usize = 1024 * 1024;
+
+/// The code of an [`ApiError`](ApiError) response, left in
+/// its extensions for the rejection events
+/// ([`record_rejections`](super::events::record_rejections)).
+#[derive(Debug, Clone, Copy)]
+pub struct ErrorCode(pub &'static str);
 
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ApiError {
@@ -83,12 +93,21 @@ impl From<ScenarioError> for ApiError {
     }
 }
 
+impl From<MissionError> for ApiError {
+    fn from(e: MissionError) -> Self {
+        match e {
+            MissionError::Scenario(e) => ApiError::from(e),
+            MissionError::Invalid(m) => ApiError::Invalid(m),
+            MissionError::NotFound(m) => ApiError::NotFound(m),
+            MissionError::Conflict(m) => ApiError::Conflict(m),
+        }
+    }
+}
+
 impl IntoResponse for ApiError {
     fn into_response(self) -> Response {
         let mut response = (self.status(), Json(self.document())).into_response();
-        response
-            .extensions_mut()
-            .insert(super::events::ErrorCode(self.code()));
+        response.extensions_mut().insert(ErrorCode(self.code()));
         if let ApiError::RateLimited(_) = self {
             // The bucket refills one write per 1/rate s; one second is a
             // safe, simple hint.
@@ -109,7 +128,7 @@ pub async fn json_too_large(response: Response) -> Response {
         .get(axum::http::header::CONTENT_TYPE)
         .is_some_and(|v| v.as_bytes().starts_with(b"application/json"));
     if response.status() == StatusCode::PAYLOAD_TOO_LARGE && !is_json {
-        return ApiError::TooLarge(super::MAX_BODY).into_response();
+        return ApiError::TooLarge(MAX_BODY).into_response();
     }
     response
 }

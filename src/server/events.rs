@@ -10,12 +10,8 @@ use axum::middleware::Next;
 use axum::response::Response;
 
 use super::AppState;
+use super::error::ErrorCode;
 use crate::recorder::messages::{EventKind, EventRecord};
-
-/// The code of an [`ApiError`](super::error::ApiError) response, left in
-/// its extensions for [`record_rejections`].
-#[derive(Debug, Clone, Copy)]
-pub struct ErrorCode(pub &'static str);
 
 /// The remote address of a request, when the server knows it (it is served
 /// with connect info; a router used without, as in some tests, has none).

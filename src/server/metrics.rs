@@ -120,8 +120,9 @@ fn process_metrics() -> String {
     out
 }
 
-/// CPU seconds this process has used so far (Linux only), for
-/// [`crate::load`] to report its own share of a shared machine.
+/// CPU seconds this process has used so far (Linux only), for the load
+/// client (`seacover bench load`) to report its own share of a shared
+/// machine.
 pub fn own_cpu_seconds() -> Option<f64> {
     cpu_seconds(&std::fs::read_to_string("/proc/self/stat").ok()?)
 }

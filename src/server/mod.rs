@@ -1,5 +1,5 @@
 //! `seacover serve`: the coordinator (SPEC §3). Router and start-up here; the
-//! tick task and its state in [`state`], WebSocket endpoints in [`ws`], REST
+//! tick task and its state in [`coordinator`], WebSocket endpoints in [`ws`], REST
 //! in [`api`], the HTTP error type in [`error`].
 //!
 //! Shutdown: cancelling the token stops accepting connections, makes the tick
@@ -7,14 +7,16 @@
 //! tracked WebSocket task.
 
 pub mod api;
+mod app;
 pub mod auth;
 pub mod config;
+pub mod coordinator;
 pub mod error;
 pub mod events;
 pub mod metrics;
 pub mod openapi;
 pub mod replay;
-pub mod state;
+pub mod responses;
 pub mod store;
 pub mod web;
 pub mod ws;
@@ -30,31 +32,16 @@ use axum::extract::DefaultBodyLimit;
 use axum::routing::{delete, get, post, put};
 use axum::serve::ListenerExt as _;
 use tokio::net::TcpListener;
-use tokio::sync::{mpsc, watch};
+use tokio::sync::mpsc;
 use tokio_util::sync::CancellationToken;
 use tokio_util::task::TaskTracker;
 
-use crate::recorder::{MissionClock, Recorder, RecorderConfig};
-use state::{Coordinator, Mission, Request, Snapshot, TickSettings};
-
-/// Shared by every handler; cheap to clone.
-#[derive(Clone)]
-pub struct AppState {
-    /// Required for writes and vessel links when set.
-    pub token: Option<Arc<str>>,
-    pub requests: mpsc::Sender<Request>,
-    pub snapshot: watch::Receiver<Arc<Snapshot>>,
-    pub tracker: TaskTracker,
-    pub shutdown: CancellationToken,
-    pub next_link: Arc<AtomicU64>,
-    /// One token bucket for every write of every client: writes are an
-    /// operator's, and each costs an fsync.
-    pub writes: Arc<auth::WriteLimiter>,
-    /// Where links hand their poses and events (off: does nothing).
-    pub recorder: Recorder,
-    /// Mission time for what links and handlers record.
-    pub clock: MissionClock,
-}
+use crate::mission::Mission;
+use crate::mission::MissionClock;
+use crate::recorder::{Recorder, RecorderConfig};
+pub use app::AppState;
+use coordinator::{Coordinator, TickSettings};
+pub use error::MAX_BODY;
 
 /// Server settings.
 #[derive(Debug, Clone)]
@@ -106,12 +93,9 @@ pub enum ServeError {
     #[error("the mission stored in {path} is not valid: {source}")]
     StoredMission {
         path: PathBuf,
-        source: error::ApiError,
+        source: crate::mission::MissionError,
     },
 }
-
-/// Largest request body accepted.
-pub const MAX_BODY: usize = 1024 * 1024;
 
 /// Every route of SPEC §3.
 pub fn router(app: AppState) -> Router {
@@ -226,7 +210,7 @@ pub async fn serve(
         tracker: tracker.clone(),
         shutdown: shutdown.clone(),
         next_link: Arc::new(AtomicU64::new(1)),
-        writes: Arc::new(auth::write_limiter(config.write_rate, config.write_burst)),
+        writes: Arc::new(app::write_limiter(config.write_rate, config.write_burst)),
         recorder: recorder.clone(),
         clock,
     };

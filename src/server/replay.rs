@@ -29,16 +29,17 @@ use tokio::sync::{mpsc, oneshot, watch};
 use tokio_util::sync::CancellationToken;
 use tokio_util::task::TaskTracker;
 
+use super::coordinator::Request;
 use super::error::ApiError;
-use super::state::Request;
-use super::{AppState, ServeError, auth, router};
+use super::{AppState, ServeError, router};
+use crate::mission::MissionClock;
 use crate::protocol::{
     CommandDocument, CoverageDocument, MissionDocument, PoseDocument, Snapshot, SnapshotDocument,
     VesselStatusDocument,
 };
+use crate::recorder::Recorder;
 use crate::recorder::messages::{self, CommandRecord, CoverageRecord, MissionRecord, PoseRecord};
 use crate::recorder::reader::{ReadError, Recording};
-use crate::recorder::{MissionClock, Recorder};
 
 /// How far back a moment's poses and commands are looked for [ns]: longer
 /// than the liveness timeout, so every live vessel has one.
@@ -206,7 +207,7 @@ pub async fn serve(
         tracker: tracker.clone(),
         shutdown: shutdown.clone(),
         next_link: Arc::new(AtomicU64::new(1)),
-        writes: Arc::new(auth::write_limiter(50, 100)),
+        writes: Arc::new(super::app::write_limiter(50, 100)),
         recorder: Recorder::off(),
         clock: MissionClock::first_tick_now(1.0, 10.0),
     };

@@ -8,7 +8,7 @@
 //!   change survives `kill -9` at any later moment, and an unacknowledged one
 //!   is either wholly there or wholly absent (redb's commit is atomic);
 //! - the store holds documents already validated by
-//!   [`Mission::changed`](super::state::Mission::changed); what is loaded is
+//!   [`Mission::changed`](crate::mission::Mission::changed); what is loaded is
 //!   validated again anyway, so a file edited by hand cannot start a server
 //!   with an invalid mission;
 //! - risk objects keep their insertion order across restarts (each carries a
@@ -22,7 +22,7 @@ use std::path::{Path, PathBuf};
 
 use redb::{Database, Durability, ReadableDatabase, ReadableTable, TableDefinition};
 
-use super::state::{ChangeResult, MissionChange};
+use crate::mission::{ChangeResult, MissionChange};
 use crate::protocol::{
     ActuatorDocument, GuidanceDocument, MissionDocument, RegionDocument, RiskDocument,
     RiskObjectDocument,
@@ -183,7 +183,7 @@ impl Store {
     }
 
     /// Makes one accepted change durable. `result` is what
-    /// [`Mission::changed`](super::state::Mission::changed) answered, which
+    /// [`Mission::changed`](crate::mission::Mission::changed) answered, which
     /// carries the id a new object was given.
     pub fn apply(&self, change: &MissionChange, result: &ChangeResult) -> Result<(), StoreError> {
         self.write(|meta, objects| {
@@ -255,7 +255,7 @@ fn without_id(object: &RiskObjectDocument) -> RiskObjectDocument {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::server::state::Mission;
+    use crate::mission::Mission;
 
     #[test]
     fn a_saved_mission_and_its_changes_load_back_in_order() {

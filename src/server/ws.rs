@@ -18,11 +18,11 @@ use futures_util::{SinkExt, StreamExt};
 use tokio::sync::{mpsc, oneshot, watch};
 
 use super::AppState;
+use super::coordinator::{Outgoing, Request};
 use super::events::Peer;
-use super::state::{Outgoing, Request};
+use crate::mission::scenario::valid_id;
 use crate::protocol::{CoordinatorMessage, PoseDocument, VesselMessage};
 use crate::recorder::messages::{EventKind, EventRecord};
-use crate::scenario::valid_id;
 
 /// Largest frame accepted on either socket.
 pub const MAX_FRAME: usize = 64 * 1024;

@@ -230,7 +230,13 @@ mod tests {
 
     #[test]
     fn counts_episodes_not_steps() {
-        let shore = Shore::new(&crate::geometry::region::fixtures::square(false));
+        let p = |x, y| Point { x, y };
+        let square = crate::geometry::Region::new(
+            vec![p(0.0, 0.0), p(100.0, 0.0), p(100.0, 100.0), p(0.0, 100.0)],
+            vec![],
+        )
+        .expect("a valid region");
+        let shore = Shore::new(&square);
         let mut m = Monitor::new(2, 2.0, 8.0, 4.0, 0.1);
         let mut s = vec![at(50.0, 50.0), at(58.0, 50.0)];
         m.tick(&s, &shore, [false, true].into_iter());

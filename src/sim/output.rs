@@ -82,7 +82,7 @@ impl Summary {
 }
 
 fn lloyd_e_max(config: &Config, tick: &super::Tick) -> f64 {
-    let Some(fleet) = super::fleet_at(config, tick.lloyd_positions.iter().copied()) else {
+    let Some(fleet) = super::run::fleet_at(config, tick.lloyd_positions.iter().copied()) else {
         return f64::NAN;
     };
     let eval = crate::coverage::evaluate(

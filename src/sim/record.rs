@@ -13,17 +13,18 @@
 use std::path::Path;
 use std::sync::Arc;
 
-use super::{Config, Run, SimError, fleet_at};
+use super::run::fleet_at;
+use super::{Config, Run, SimError};
 use crate::coverage::{Options, evaluate};
 use crate::geometry::Point;
+use crate::mission::scenario::{LocalScenario, evaluation_document};
+use crate::mission::{guidance_document, safety_document};
 use crate::protocol::{
     ActuatorDocument, CommandDocument, CoverageDocument, MissionDocument, PoseDocument,
     RiskDocument, Snapshot, SnapshotDocument, VesselStatusDocument,
 };
 use crate::recorder::messages::SimVesselRecord;
 use crate::recorder::{Entry, Recorder, RecorderConfig, Target};
-use crate::scenario::{LocalScenario, evaluation_document};
-use crate::server::state::{guidance_document, safety_document};
 
 /// Records `run` of `config` (from the scenario document `doc`) to `path`.
 pub fn record(

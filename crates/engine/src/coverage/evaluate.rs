@@ -1,0 +1,166 @@
+//! One full evaluation: partition, then mass, centroid, area and gradient of
+//! every cell, and H(P) = Σ_i M_i (SPEC §2 "Cell figures").
+//!
+//! Definitions for the edge cases (all documented results, never NaN):
+//! - empty cell (vessel outside Q with no share of it, or dominated by other
+//!   vessels, including the later of two coincident vessels): mass 0, area 0,
+//!   gradient 0, centroid = the point of Q nearest the vessel (the vessel's own
+//!   position when it is inside Q), so guidance brings an outsider back;
+//! - Φ ≡ 0 (φ0 = 0 and no objects): every mass is 0 and each centroid is the
+//!   f_i-weighted centroid of the cell, the limit of φ0 → 0⁺;
+//! - a cell far from its vessel keeps its centroid even when its mass
+//!   underflows to 0 (see [`integrate`](super::integrate) on scaling).
+
+use super::density::RiskField;
+use super::fleet::Fleet;
+use super::gaussian::Gaussian;
+use super::integrate::{Tolerance, integrate};
+use super::partition::{CellGeometry, power_cells_with};
+use crate::geometry::{Point, Region, bounds};
+
+/// Evaluation settings.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Options {
+    pub tolerance: Tolerance,
+    /// Spread the cells over every core (rayon's pool) when the fleet has
+    /// at least [`PARALLEL_MIN`](super::PARALLEL_MIN) vessels. The result
+    /// is identical: cells are independent and H is summed in fleet order.
+    /// Off by default, so the benchmarks and the simulator measure one core.
+    pub parallel: bool,
+}
+
+/// Figures of one vessel's cell.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CellResult {
+    /// M_i = ∫_{V_i} f_i Φ.
+    pub mass: f64,
+    /// C_i.
+    pub centroid: Point,
+    /// Area of V_i.
+    pub area: f64,
+    /// ∂H/∂p_i = 2 β M_i (C_i − p_i).
+    pub gradient: Point,
+    /// V_i itself.
+    pub geometry: CellGeometry,
+}
+
+/// The whole evaluation, cells in the fleet's order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Evaluation {
+    /// H(P) = Σ_i M_i.
+    pub h: f64,
+    pub cells: Vec<CellResult>,
+}
+
+/// Evaluates the coverage of `fleet` over `region` under `risk`.
+pub fn evaluate(region: &Region, risk: &RiskField, fleet: &Fleet, options: &Options) -> Evaluation {
+    let geometries = power_cells_with(region, fleet, options.parallel);
+    let cells: Vec<CellResult> = super::map_each(
+        geometries.into_iter().zip(fleet.vessels()).collect(),
+        options.parallel && fleet.len() >= super::PARALLEL_MIN,
+        |_, (geometry, vessel), near: &mut Vec<usize>| {
+            cell_figures(region, risk, vessel, fleet.beta(), geometry, options, near)
+        },
+    );
+    let h = cells.iter().map(|c| c.mass).sum();
+    Evaluation { h, cells }
+}
+
+/// One vessel's figures, from its geometry in the partition of the whole
+/// fleet ([`power_cells_with`]): [`evaluate`] is the partition and then this
+/// for every vessel, so a caller may compute the cells one by one, in any
+/// order and on any thread, with the same result. `near` is scratch space,
+/// reused from cell to cell.
+pub fn cell_figures(
+    region: &Region,
+    risk: &RiskField,
+    vessel: &super::Vessel,
+    beta: f64,
+    geometry: CellGeometry,
+    options: &Options,
+    near: &mut Vec<usize>,
+) -> CellResult {
+    let p = vessel.position;
+    let zero = Point { x: 0.0, y: 0.0 };
+    let rings = local_rings(&geometry, p);
+    if rings.is_empty() {
+        return CellResult {
+            mass: 0.0,
+            centroid: region.closest_point(p),
+            area: 0.0,
+            gradient: zero,
+            geometry: CellGeometry::Empty,
+        };
+    }
+    let area = geometry.area();
+    let (min, max) = world_bounds(&rings, p);
+
+    let ln_k = vessel.k.ln();
+    let mut terms = Vec::new();
+    if risk.base() > 0.0 {
+        terms.push(Gaussian {
+            log_weight: ln_k + risk.base().ln(),
+            a: beta,
+            center: zero,
+        });
+    }
+    let tol = options.tolerance;
+    risk.objects_near(min, max, 1e-3 * tol.relative, near);
+    for &j in near.iter() {
+        let o = risk.objects()[j];
+        let b = 1.0 / (2.0 * o.sigma * o.sigma);
+        let s = o.center - p;
+        let a = beta + b;
+        terms.push(Gaussian {
+            log_weight: ln_k + o.alpha.ln() - beta * b / a * (s.x * s.x + s.y * s.y),
+            a,
+            center: s * (b / a),
+        });
+    }
+    let weightless = terms.is_empty();
+    if weightless {
+        // Φ ≡ 0: the centroid is the limit of φ0 → 0⁺, the mass is 0.
+        terms.push(Gaussian {
+            log_weight: 0.0,
+            a: beta,
+            center: zero,
+        });
+    }
+    let r = integrate(&rings, &terms, tol);
+    if !(r.mass > 0.0 && r.mass.is_finite()) {
+        return CellResult {
+            mass: 0.0,
+            centroid: region.closest_point(p),
+            area,
+            gradient: zero,
+            geometry,
+        };
+    }
+    let scale = if weightless { 0.0 } else { r.log_scale.exp() };
+    let mass = r.mass * scale;
+    let offset = r.moment / r.mass;
+    CellResult {
+        mass,
+        centroid: p + offset,
+        area,
+        gradient: r.moment * (2.0 * beta * scale),
+        geometry,
+    }
+}
+
+/// The cell's oriented rings relative to `p` (for a clipped cell, the exact
+/// chain), as [`integrate`] needs them.
+fn local_rings(geometry: &CellGeometry, p: Point) -> Vec<Vec<Point>> {
+    let shift = |ring: &[Point]| ring.iter().map(|v| *v - p).collect::<Vec<_>>();
+    match geometry {
+        CellGeometry::Empty => Vec::new(),
+        CellGeometry::Convex(c) => vec![shift(&c.vertices)],
+        CellGeometry::Clipped { rings, .. } => rings.iter().map(|r| shift(r)).collect(),
+    }
+}
+
+/// World-coordinate bounds of local rings.
+fn world_bounds(rings: &[Vec<Point>], p: Point) -> (Point, Point) {
+    let (min, max) = bounds(rings.iter().flatten());
+    (min + p, max + p)
+}

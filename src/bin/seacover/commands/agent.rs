@@ -1,0 +1,91 @@
+//! `seacover agent`: simulated vessels, each on its own link to a
+//! coordinator; or, with `--mavlink`, a bridge of real autopilots onto it.
+
+use crate::shell::{self, Preset};
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Coordinator base URL, e.g. http://127.0.0.1:8080.
+    #[arg(long)]
+    server: String,
+    /// How many vessels (named usv-1 …); the first eight start where the
+    /// paper's do, further ones at random in the paper's region.
+    #[arg(long, default_value_t = 8)]
+    vessels: usize,
+    /// Run one vessel with this id instead.
+    #[arg(long)]
+    id: Option<String>,
+    /// Vessel preset: `paper` or `otter`.
+    #[arg(long, value_enum, default_value = "paper")]
+    preset: Preset,
+    #[arg(long, default_value_t = 1.0)]
+    time_warp: f64,
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Bearer token of the coordinator.
+    #[arg(long, env = "SEACOVER_TOKEN", hide_env_values = true)]
+    token: Option<String>,
+    /// Bridge the autopilots on this MAVLink endpoint instead of
+    /// simulating vessels (repeatable): `tcpout:HOST:PORT`,
+    /// `udpin:ADDR:PORT`, `udpout:HOST:PORT`, `serial:DEVICE:BAUD`.
+    /// Each autopilot becomes the vessel `mav-<sysid>` (or --id when
+    /// there is exactly one). The mission must have an origin.
+    #[arg(long, value_name = "ENDPOINT", conflicts_with_all = ["vessels", "preset", "time_warp", "seed"])]
+    mavlink: Vec<String>,
+    /// With --mavlink: switch each vehicle to GUIDED and arm it, once,
+    /// at start (simulators and tests; otherwise the operator does).
+    #[arg(long, requires = "mavlink")]
+    arm: bool,
+    /// With --mavlink: the bridge's own MAVLink system id (a ground
+    /// station's; ArduPilot's SYSID_MYGCS is 255 by default).
+    #[arg(long, default_value_t = 255, requires = "mavlink")]
+    mavlink_sysid: u8,
+}
+
+pub async fn run(args: Args) -> anyhow::Result<()> {
+    if args.mavlink.is_empty() {
+        simulate(args).await
+    } else {
+        bridge(args).await
+    }
+}
+
+async fn bridge(args: Args) -> anyhow::Result<()> {
+    if let Some(id) = &args.id {
+        anyhow::ensure!(
+            seacover::mission::scenario::valid_id(id),
+            "--id must match [A-Za-z0-9_.-]{{1,64}}"
+        );
+    }
+    let config = seacover::agent::mavlink::BridgeConfig {
+        server: args.server,
+        endpoints: args.mavlink,
+        arm: args.arm,
+        token: args.token,
+        id: args.id,
+        sysid: args.mavlink_sysid,
+        origin_poll: std::time::Duration::from_secs(2),
+    };
+    seacover::agent::mavlink::run(config, shell::stop_on_signal()).await?;
+    Ok(())
+}
+
+async fn simulate(args: Args) -> anyhow::Result<()> {
+    shell::check_warp(args.time_warp)?;
+    let vessels = seacover::agent::fleet(args.vessels, args.id, args.preset.params(), args.seed)?;
+    let url = seacover::agent::link::link_url(&args.server).ok_or_else(|| {
+        anyhow::anyhow!(
+            "--server must be an http:// or ws:// URL, got {:?}",
+            args.server
+        )
+    })?;
+    let config = seacover::agent::AgentConfig {
+        url,
+        time_warp: args.time_warp,
+        pose_hz: 20.0,
+        seed: args.seed,
+        token: args.token,
+    };
+    seacover::agent::run_fleet(config, vessels, shell::stop_on_signal()).await;
+    Ok(())
+}

@@ -1,0 +1,68 @@
+//! `seacover bench load`: the load benchmark of a running coordinator.
+
+use crate::shell;
+
+#[derive(clap::Subcommand)]
+pub enum Command {
+    /// Open N vessel links to a coordinator, report poses at a rate, and
+    /// measure links held, commands, latency and the coordinator's CPU and
+    /// memory (SPEC §4 targets).
+    Load(LoadArgs),
+}
+
+#[derive(clap::Args)]
+pub struct LoadArgs {
+    /// Coordinator base URL, e.g. http://127.0.0.1:8090.
+    #[arg(long)]
+    server: String,
+    #[arg(long, default_value_t = 1000)]
+    vessels: usize,
+    /// Poses per second per vessel.
+    #[arg(long, default_value_t = 20.0)]
+    rate: f64,
+    /// Measured seconds.
+    #[arg(long, default_value_t = 30.0)]
+    duration: f64,
+    /// Seconds of settling after every link has its first command.
+    #[arg(long, default_value_t = 2.0)]
+    warmup: f64,
+    /// The coordinator's --time-warp.
+    #[arg(long, default_value_t = 1.0)]
+    time_warp: f64,
+    /// Seed of the start positions.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Bearer token of the coordinator.
+    #[arg(long, env = "SEACOVER_TOKEN", hide_env_values = true)]
+    token: Option<String>,
+    /// Print the report as JSON instead of a table.
+    #[arg(long)]
+    json: bool,
+}
+
+pub async fn run(Command::Load(args): Command) -> anyhow::Result<()> {
+    let seconds = |name: &str, s: f64| {
+        anyhow::ensure!(
+            s.is_finite() && (0.0..=86_400.0).contains(&s),
+            "--{name} must be in [0, 86400] s"
+        );
+        Ok(std::time::Duration::from_secs_f64(s))
+    };
+    let mut config = seacover::load::LoadConfig::new(
+        args.server,
+        args.vessels,
+        args.rate,
+        seconds("duration", args.duration)?,
+    );
+    config.warmup = seconds("warmup", args.warmup)?;
+    config.time_warp = args.time_warp;
+    config.seed = args.seed;
+    config.token = args.token;
+    let report = seacover::load::run(config, shell::stop_on_signal()).await?;
+    if args.json {
+        println!("{}", report.to_json());
+    } else {
+        print!("{report}");
+    }
+    Ok(())
+}

@@ -1,0 +1,43 @@
+//! `seacover demo`: the coordinator and eight simulated vessels on
+//! loopback, the paper's scenario, in one process.
+
+use std::path::PathBuf;
+
+use crate::shell;
+
+#[derive(clap::Args)]
+pub struct Args {
+    #[arg(long, default_value = "127.0.0.1:8080")]
+    bind: String,
+    #[arg(long, default_value_t = 1.0)]
+    time_warp: f64,
+    /// Bearer token (the demo's own vessels use it too).
+    #[arg(long, env = "SEACOVER_TOKEN", hide_env_values = true)]
+    token: Option<String>,
+    /// Record the run as MCAP files in this directory.
+    #[arg(long, value_name = "DIR")]
+    record: Option<PathBuf>,
+}
+
+pub async fn run(args: Args) -> anyhow::Result<()> {
+    shell::check_warp(args.time_warp)?;
+    let (listener, stop) = shell::listen(&args.bind).await?;
+    let addr = listener.local_addr()?;
+    let recording = args.record.as_ref().map(|dir| dir.display().to_string());
+    let run = tokio::spawn(seacover::demo::run(
+        listener,
+        args.time_warp,
+        args.token,
+        args.record,
+        stop,
+    ));
+    println!("seacover demo: coordinator with 8 vessels (usv-1 … usv-8), mission in memory");
+    println!("  dashboard: http://{addr}/");
+    println!("  coverage: http://{addr}/api/v1/coverage   vessels: http://{addr}/api/v1/vessels");
+    if let Some(dir) = recording {
+        println!("  recording: {dir}/ (MCAP; `seacover replay FILE` plays it back)");
+    }
+    println!("  stop with ctrl-c");
+    run.await??;
+    Ok(())
+}

@@ -1,0 +1,27 @@
+//! `seacover replay`: the dashboard over a recording, read-only.
+
+use std::path::PathBuf;
+
+use crate::shell;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// An MCAP recording (of `serve`, `demo --record` or `sim --record`).
+    file: PathBuf,
+    #[arg(long, default_value = "127.0.0.1:8080")]
+    bind: String,
+    /// Recording seconds per wall-clock second.
+    #[arg(long, default_value_t = 1.0)]
+    speed: f64,
+}
+
+pub async fn run(Args { file, bind, speed }: Args) -> anyhow::Result<()> {
+    let (listener, stop) = shell::listen(&bind).await?;
+    println!(
+        "seacover: replaying {} on http://{}",
+        file.display(),
+        listener.local_addr()?
+    );
+    seacover::server::replay::serve(listener, file, speed, stop).await?;
+    Ok(())
+}

@@ -1,0 +1,85 @@
+//! `seacover serve`: the coordinator (HTTP API, vessel links, coverage
+//! tick), its mission in a data directory, recorded as MCAP by default.
+
+use std::path::PathBuf;
+
+use crate::shell;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Address to listen on (loopback only until tokens exist).
+    #[arg(long, default_value = "127.0.0.1:8080")]
+    bind: String,
+    /// Run the tick clock this many times faster than real time.
+    #[arg(long, default_value_t = 1.0)]
+    time_warp: f64,
+    /// Bearer token required for writes and vessel links.
+    #[arg(long, env = "SEACOVER_TOKEN", hide_env_values = true)]
+    token: Option<String>,
+    /// Where the mission is stored (created when missing).
+    #[arg(long, default_value = "seacover-data")]
+    data_dir: PathBuf,
+    /// TOML file with the mission (region, risk, actuator, guidance,
+    /// tick rate) and server settings; it seeds a new data directory only
+    /// (see examples/seacover.toml).
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// Record the run as MCAP in DATA_DIR/recordings/ (`on`) or not
+    /// (`off`).
+    #[arg(long, value_enum, default_value = "on")]
+    record: OnOff,
+    /// Start a new recording file after this many MiB.
+    #[arg(long, default_value_t = 256)]
+    record_max_mb: u64,
+    /// Start a new recording file after this many minutes (fractions
+    /// allowed: 0.5 is thirty seconds).
+    #[arg(long, default_value_t = 60.0, value_parser = positive_minutes)]
+    record_max_minutes: f64,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum OnOff {
+    On,
+    Off,
+}
+
+/// `--record-max-minutes`: a positive, finite number of minutes.
+fn positive_minutes(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(m) if m.is_finite() && m > 0.0 => Ok(m),
+        _ => Err(format!("{s:?} is not a positive number of minutes")),
+    }
+}
+
+pub async fn run(args: Args) -> anyhow::Result<()> {
+    let record = (args.record == OnOff::On).then(|| seacover::recorder::RecorderConfig {
+        target: seacover::recorder::Target::Directory {
+            dir: args.data_dir.join("recordings"),
+            max_bytes: args.record_max_mb.saturating_mul(1024 * 1024),
+            max_duration: std::time::Duration::try_from_secs_f64(args.record_max_minutes * 60.0)
+                .unwrap_or(std::time::Duration::MAX),
+        },
+        wall_clock: true,
+    });
+    shell::check_warp(args.time_warp)?;
+    let settings = match &args.config {
+        Some(path) => seacover::server::config::Settings::load(path)?,
+        None => Default::default(),
+    };
+    let (listener, stop) = shell::listen(&args.bind).await?;
+    // The first line of output is the address, so scripts and tests can
+    // bind port 0 and find the server.
+    println!("seacover: serving on http://{}", listener.local_addr()?);
+    let config = seacover::server::ServeConfig {
+        mission: settings.mission,
+        time_warp: args.time_warp,
+        token: args.token,
+        liveness: settings.liveness,
+        data_dir: Some(args.data_dir),
+        write_rate: settings.write_rate,
+        write_burst: settings.write_burst,
+        record,
+    };
+    seacover::server::serve(listener, config, stop).await?;
+    Ok(())
+}

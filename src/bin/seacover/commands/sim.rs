@@ -1,0 +1,249 @@
+//! `seacover sim`: the closed loop in one process (dynamics, observer,
+//! controller, guidance, coverage), written as CSV, JSON and figures; and
+//! `sim safety-study`, the harbour's collision and incursion study.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::{Context, ensure};
+use seacover::control::guidance::GuidanceMode;
+use seacover::sim::{Config, DisturbanceKind, load_scenario, run_to_dir, study};
+
+use crate::shell::Preset;
+
+#[derive(clap::Args)]
+pub struct Args {
+    #[command(subcommand)]
+    study: Option<Study>,
+    /// `paper`, `harbour-8`, `harbour-30` (built in) or a scenario JSON
+    /// file.
+    #[arg(long, default_value = "paper")]
+    scenario: String,
+    /// Start where the scenario says (`scenario`) or at random legal
+    /// starts drawn with --seed (`random`; the harbour's fleets leave
+    /// from its staging area west of the pier).
+    #[arg(long, value_enum, default_value = "scenario")]
+    starts: Starts,
+    /// `on`: reachable goals, routes round islands and the safety filter
+    /// (collision and shore avoidance); `off`: goals and routes without
+    /// the filter; `none`: straight at the centroids, no filter (the
+    /// paper's pipeline, for reproducing it).
+    #[arg(long, value_enum, default_value = "on")]
+    safety: Safety,
+    /// Least distance between two vessels' centres [m].
+    #[arg(long, default_value_t = seacover::control::safety::SafetyParams::default().safety_distance)]
+    safety_distance: f64,
+    /// Least distance from a vessel's centre to the shore [m].
+    #[arg(long, default_value_t = seacover::control::safety::SafetyParams::default().shore_distance)]
+    shore_distance: f64,
+    /// Simulated seconds.
+    #[arg(long, default_value_t = 200.0)]
+    duration: f64,
+    /// Output directory.
+    #[arg(long, default_value = "sim-out")]
+    out: PathBuf,
+    /// Guidance law: `course` (converges) or `paper` (the literal law).
+    #[arg(long, value_enum, default_value = "course")]
+    guidance: Guidance,
+    /// Vessel preset: `paper` or `otter`.
+    #[arg(long, value_enum, default_value = "paper")]
+    preset: Preset,
+    /// Seed of the random disturbances and of random starts.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Disturbances: `paper`, `gusts`, `current` or `none`.
+    #[arg(long, value_enum, default_value = "paper")]
+    disturbance: Disturbance,
+    /// Skip the figures (CSV and JSON only).
+    #[arg(long)]
+    no_figures: bool,
+    /// Also record the run as MCAP: the coordinator's channels plus each
+    /// vessel's truth, disturbance and observer estimate.
+    #[arg(long, value_name = "FILE.mcap")]
+    record: Option<PathBuf>,
+}
+
+#[derive(clap::Subcommand)]
+enum Study {
+    /// The harbour with 8 and 30 vessels from random starts, each seed with
+    /// the safety filter on and off: collisions, incursions, closest
+    /// approaches, H and interventions (docs/safety.md).
+    SafetyStudy {
+        /// Seeds 1..=N.
+        #[arg(long, default_value_t = 50)]
+        seeds: u64,
+        /// Simulated seconds per run.
+        #[arg(long, default_value_t = 400.0)]
+        duration: f64,
+        /// Where to write study.json, table.md and the trails figure.
+        #[arg(long, default_value = "target/safety-study")]
+        out: PathBuf,
+        /// Runs at once (threads).
+        #[arg(long, default_value_t = 1)]
+        jobs: usize,
+    },
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum Starts {
+    Scenario,
+    Random,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum Safety {
+    On,
+    Off,
+    None,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum Guidance {
+    Course,
+    Paper,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum Disturbance {
+    Paper,
+    Gusts,
+    Current,
+    None,
+}
+
+pub fn run(args: Args) -> ExitCode {
+    let (name, result) = match args.study {
+        Some(Study::SafetyStudy {
+            seeds,
+            duration,
+            ref out,
+            jobs,
+        }) => ("sim safety-study", safety_study(seeds, duration, out, jobs)),
+        None => ("sim", simulate(&args)),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("seacover {name}: {e:#}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+fn simulate(args: &Args) -> anyhow::Result<()> {
+    ensure!(
+        args.duration.is_finite() && args.duration > 0.0 && args.duration <= 86_400.0,
+        "--duration must be in (0, 86400] s"
+    );
+    let (filter, reachable_goals) = match args.safety {
+        Safety::On => (true, true),
+        Safety::Off => (false, true),
+        Safety::None => (false, false),
+    };
+    let (loaded, headings) = load_scenario(&args.scenario)?;
+    let mut config = Config::new(loaded, headings, args.duration);
+    config.guidance.mode = match args.guidance {
+        Guidance::Course => GuidanceMode::Course,
+        Guidance::Paper => GuidanceMode::Paper,
+    };
+    config.vessel = args.preset.params();
+    config.preset = args.preset.name().to_string();
+    config.seed = args.seed;
+    config.disturbance = match args.disturbance {
+        Disturbance::Paper => DisturbanceKind::Paper,
+        Disturbance::Gusts => DisturbanceKind::Gusts,
+        Disturbance::Current => DisturbanceKind::Current,
+        Disturbance::None => DisturbanceKind::None,
+    };
+    config.safety.filter = filter;
+    config.safety.reachable_goals = reachable_goals;
+    config.safety.safety_distance = args.safety_distance;
+    config.safety.shore_distance = args.shore_distance;
+    config.safety.validate()?;
+    let config = match args.starts {
+        Starts::Scenario => config,
+        Starts::Random => {
+            config.with_random_starts(args.seed, seacover::sim::staging_zone(&args.scenario))?
+        }
+    };
+
+    let bar = std::io::IsTerminal::is_terminal(&std::io::stderr()).then(|| {
+        let bar = indicatif::ProgressBar::new(1000);
+        bar.set_style(
+            indicatif::ProgressStyle::with_template("{bar:40} {percent:>3}% simulated, eta {eta}")
+                .expect("a valid template"),
+        );
+        bar
+    });
+    let document = match &args.record {
+        Some(_) => Some(seacover::sim::load_scenario_document(&args.scenario)?),
+        None => None,
+    };
+    let record = args.record.as_deref().zip(document.as_ref());
+    let (summary, safety) = run_to_dir(&config, &args.out, !args.no_figures, record, |f| {
+        if let Some(bar) = &bar {
+            bar.set_position((f * 1000.0) as u64);
+        }
+    })?;
+    if let Some(bar) = bar {
+        bar.finish_and_clear();
+    }
+    println!("{}", serde_json::to_string_pretty(&summary)?);
+    eprintln!(
+        "safety (filter {}): {} collisions, {} incursions, closest pair {:.2} m, closest to shore {:.2} m, interventions {:.2} % of vessel-ticks (safety.json)",
+        if safety.filter { "on" } else { "off" },
+        safety.collisions,
+        safety.incursions,
+        safety.min_pair_distance.unwrap_or(f64::INFINITY),
+        safety.min_shore_clearance,
+        100.0 * safety.intervention_rate,
+    );
+    Ok(())
+}
+
+fn safety_study(seeds: u64, duration: f64, out: &Path, jobs: usize) -> anyhow::Result<()> {
+    ensure!(
+        (1..=10_000).contains(&seeds),
+        "--seeds must be in [1, 10000]"
+    );
+    ensure!(
+        duration.is_finite() && duration > 0.0 && duration <= 86_400.0,
+        "--duration must be in (0, 86400] s"
+    );
+    ensure!((1..=64).contains(&jobs), "--jobs must be in [1, 64]");
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let started = std::time::Instant::now();
+    let seed_list: Vec<u64> = (1..=seeds).collect();
+    let runs = study::run_study(&[8, 30], &seed_list, duration, jobs, |r| {
+        eprintln!(
+            "  {:>2} vessels, seed {:>3}, filter {:<3}: {} collisions, {} incursions, H {:.1}",
+            r.vessels,
+            r.seed,
+            if r.filter { "on" } else { "off" },
+            r.collisions,
+            r.incursions,
+            r.h_end
+        );
+    })?;
+    let summaries = study::summarize(&runs);
+    let table = study::table(&summaries);
+    let doc = serde_json::json!({"seeds": seeds, "duration": duration, "summaries": summaries, "runs": runs});
+    std::fs::write(
+        out.join("study.json"),
+        serde_json::to_string_pretty(&doc)? + "\n",
+    )?;
+    std::fs::write(out.join("table.md"), &table)?;
+    // The figure: the first seed of the bigger fleet, filter on.
+    let config = study::study_config(30, 1, true, duration)?;
+    let run = seacover::sim::run(&config, |_| {})?;
+    seacover::sim::figures::draw_trails(&out.join("harbour-30-trails"), &config, &run)
+        .map_err(anyhow::Error::msg)?;
+    print!("{table}");
+    eprintln!(
+        "{} runs in {:.0} s; study.json, table.md and harbour-30-trails.{{png,svg}} in {}",
+        runs.len(),
+        started.elapsed().as_secs_f64(),
+        out.display()
+    );
+    Ok(())
+}

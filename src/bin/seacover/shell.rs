@@ -1,0 +1,121 @@
+//! What the subcommands share: the tokio runtime, ctrl-c and SIGTERM,
+//! listening, the time-warp check and how an outcome becomes an exit code
+//! and a message.
+
+use std::process::ExitCode;
+
+use anyhow::Context;
+use tokio_util::sync::CancellationToken;
+
+/// Runs `future` to completion on a multi-threaded runtime.
+pub fn block_on<F: std::future::Future>(future: F) -> F::Output {
+    tokio::runtime::Builder::new_multi_thread()
+        .enable_all()
+        .build()
+        .expect("a tokio runtime")
+        .block_on(future)
+}
+
+/// The exit code of a subcommand's outcome; a failure is printed as
+/// `seacover: ` and its causes.
+pub fn report(result: anyhow::Result<()>) -> ExitCode {
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        // A reader that stops early (`seacover record export … | head`)
+        // closes the pipe: that is the reader's choice, not a failure.
+        Err(e)
+            if e.chain().any(|c| {
+                c.downcast_ref::<std::io::Error>()
+                    .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+            }) =>
+        {
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("seacover: {}", error_chain(&e));
+            ExitCode::from(2)
+        }
+    }
+}
+
+/// An error and its causes, `: `-separated, leaving out a cause whose text
+/// the message before it already quotes (library errors say their source
+/// in their own message, for logs that print only that).
+fn error_chain(e: &anyhow::Error) -> String {
+    let mut text = String::new();
+    for cause in e.chain() {
+        let part = cause.to_string();
+        if text.is_empty() {
+            text = part;
+        } else if !text.contains(&part) {
+            text = format!("{text}: {part}");
+        }
+    }
+    text
+}
+
+/// A token that ctrl-c or SIGTERM cancels.
+pub fn stop_on_signal() -> CancellationToken {
+    let token = CancellationToken::new();
+    let cancel = token.clone();
+    tokio::spawn(async move {
+        let ctrl_c = tokio::signal::ctrl_c();
+        #[cfg(unix)]
+        {
+            let mut term =
+                tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate())
+                    .expect("a SIGTERM handler");
+            tokio::select! {
+                _ = ctrl_c => {}
+                _ = term.recv() => {}
+            }
+        }
+        #[cfg(not(unix))]
+        let _ = ctrl_c.await;
+        cancel.cancel();
+    });
+    token
+}
+
+pub fn check_warp(w: f64) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        w.is_finite() && (0.01..=1000.0).contains(&w),
+        "--time-warp must be in [0.01, 1000]"
+    );
+    Ok(())
+}
+
+/// Binds `bind` and returns the listener with a token that ctrl-c or SIGTERM
+/// cancels.
+pub async fn listen(bind: &str) -> anyhow::Result<(tokio::net::TcpListener, CancellationToken)> {
+    let listener = tokio::net::TcpListener::bind(bind)
+        .await
+        .with_context(|| format!("binding {bind}"))?;
+    Ok((listener, stop_on_signal()))
+}
+
+/// `--preset`: a vessel model the library knows.
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Preset {
+    /// The paper's hull (section 5).
+    Paper,
+    /// Maritime Robotics' Otter USV.
+    Otter,
+}
+
+impl Preset {
+    pub fn name(self) -> &'static str {
+        match self {
+            Preset::Paper => "paper",
+            Preset::Otter => "otter",
+        }
+    }
+
+    pub fn params(self) -> seacover::control::model::VesselParams {
+        use seacover::control::model::VesselParams;
+        match self {
+            Preset::Paper => VesselParams::PAPER,
+            Preset::Otter => VesselParams::OTTER,
+        }
+    }
+}

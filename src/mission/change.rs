@@ -1,0 +1,138 @@
+//! Changes to a mission: one REST write each, applied to a copy and
+//! validated as a whole, so a rejected change leaves the mission as it was.
+
+use std::sync::Arc;
+
+use super::scenario::ScenarioError;
+use super::{Mission, MissionError, origin_frame, risk_field};
+use crate::control::safety::SafetyLayer;
+use crate::protocol::{
+    MissionDocument, OriginDocument, RegionInput, RiskObjectDocument, RiskObjectInput,
+};
+
+/// One write of the REST API. Geographic inputs are placed in the plane by
+/// [`Mission::changed`], with the origin of the mission they change: the
+/// tick task applies changes in order, so a region written just after an
+/// origin is placed with that origin.
+#[derive(Debug, Clone)]
+pub enum MissionChange {
+    Origin(OriginDocument),
+    Region(RegionInput),
+    Base(f64),
+    AddObject(RiskObjectInput),
+    PutObject(String, RiskObjectInput),
+    DeleteObject(String),
+}
+
+/// What a change answers with.
+#[derive(Debug, Clone)]
+pub enum ChangeResult {
+    // Boxed: the mission document is far larger than the other answers.
+    Mission(Box<MissionDocument>),
+    Object(RiskObjectDocument),
+    Deleted,
+}
+
+impl Mission {
+    /// The mission with `change` applied, validated as `evaluate` validates;
+    /// `self` is left untouched when it is rejected.
+    pub fn changed(&self, change: &MissionChange) -> Result<(Mission, ChangeResult), MissionError> {
+        let mut next = self.clone();
+        let frame = self.frame();
+        let placed = |e: crate::coverage::InputError| MissionError::from(ScenarioError::from(e));
+        let result = match change {
+            MissionChange::Origin(origin) => {
+                // The region and the objects keep their local coordinates:
+                // moving the origin moves the mission on the globe.
+                origin_frame(*origin)?;
+                next.origin = Some(*origin);
+                None
+            }
+            MissionChange::Region(input) => {
+                let doc =
+                    crate::mission::georef::input::region(input, frame.as_ref()).map_err(placed)?;
+                next.region = crate::mission::scenario::region_from_document(&doc)?;
+                next.region_doc = doc;
+                next.layer = Arc::new(
+                    SafetyLayer::new(&next.region, next.safety)
+                        .map_err(|e| MissionError::from(ScenarioError::from(e)))?,
+                );
+                None
+            }
+            MissionChange::Base(value) => {
+                next.risk_doc.base = *value;
+                None
+            }
+            MissionChange::AddObject(object) => {
+                let mut object =
+                    crate::mission::georef::input::risk_object(object, frame.as_ref(), "")
+                        .map_err(placed)?;
+                let id = match &object.id {
+                    Some(id) => {
+                        if !crate::mission::scenario::valid_id(id) {
+                            return Err(MissionError::Invalid(
+                                "id: must match [A-Za-z0-9_.-]{1,64}".into(),
+                            ));
+                        }
+                        if next
+                            .risk_doc
+                            .objects
+                            .iter()
+                            .any(|o| o.id.as_deref() == Some(id))
+                        {
+                            return Err(MissionError::Conflict(format!(
+                                "a risk object {id:?} exists already"
+                            )));
+                        }
+                        id.clone()
+                    }
+                    None => (1..)
+                        .map(|n| format!("object-{n}"))
+                        .find(|c| {
+                            !next
+                                .risk_doc
+                                .objects
+                                .iter()
+                                .any(|o| o.id.as_deref() == Some(c))
+                        })
+                        .expect("an unused id exists"),
+                };
+                object.id = Some(id);
+                next.risk_doc.objects.push(object.clone());
+                Some(object)
+            }
+            MissionChange::PutObject(id, object) => {
+                let object = crate::mission::georef::input::risk_object(object, frame.as_ref(), "")
+                    .map_err(placed)?;
+                let slot = next
+                    .risk_doc
+                    .objects
+                    .iter_mut()
+                    .find(|o| o.id.as_deref() == Some(id.as_str()))
+                    .ok_or_else(|| MissionError::NotFound(format!("no risk object {id:?}")))?;
+                *slot = RiskObjectDocument {
+                    id: Some(id.clone()),
+                    ..object
+                };
+                Some(slot.clone())
+            }
+            MissionChange::DeleteObject(id) => {
+                let before = next.risk_doc.objects.len();
+                next.risk_doc
+                    .objects
+                    .retain(|o| o.id.as_deref() != Some(id.as_str()));
+                if next.risk_doc.objects.len() == before {
+                    return Err(MissionError::NotFound(format!("no risk object {id:?}")));
+                }
+                None
+            }
+        };
+        next.risk = risk_field(&next.risk_doc)?;
+        let answer = match (change, result) {
+            (MissionChange::DeleteObject(_), _) => ChangeResult::Deleted,
+            (_, Some(object)) => ChangeResult::Object(object),
+            (_, None) => ChangeResult::Mission(Box::new(next.document())),
+        };
+        Ok((next, answer))
+    }
+}

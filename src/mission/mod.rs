@@ -1,0 +1,185 @@
+//! The mission model: what a fleet covers and how, between the wire types
+//! ([`crate::protocol`]) and the processes that run it (server, agents,
+//! simulator, recorder).
+//!
+//! Everything here is documents in, core types out (and back): no I/O, no
+//! HTTP, no async. Its parts:
+//! - [`Mission`] and its changes ([`MissionChange`], [`Mission::changed`]):
+//!   the one model the coordinator owns, validated exactly as
+//!   `seacover evaluate` validates a scenario;
+//! - [`convert`]: the conversions between documents and core types (origin
+//!   frame, guidance gains, safety parameters, risk field);
+//! - [`scenario`]: scenario documents → validated core types → evaluation
+//!   documents; [`georef`]: WGS84 documents in, GeoJSON out;
+//! - [`builtin`]: the built-in scenarios (paper, harbour);
+//! - [`clock`]: the mission clock (mission seconds under a time warp).
+//!
+//! Invariants:
+//! - a [`Mission`] is always valid: every constructor and every change
+//!   validates, and a rejected change leaves the mission untouched;
+//! - every rejection is a [`MissionError`] whose message starts with the
+//!   path of the offending field and whose code is stable (`malformed`,
+//!   `invalid`, `unsupported`, `not_found`, `conflict`); the HTTP edge
+//!   converts it with one `From`.
+
+pub mod builtin;
+mod change;
+pub mod clock;
+pub mod convert;
+mod error;
+pub mod georef;
+pub mod scenario;
+
+use std::sync::Arc;
+
+use crate::control::guidance::{GuidanceGains, GuidanceMode};
+use crate::control::safety::{SafetyLayer, SafetyParams};
+use crate::coverage::{Fleet, RiskField, Vessel};
+use crate::geometry::geodesy::LocalFrame;
+use crate::geometry::{Point, Region};
+use crate::protocol::{
+    ActuatorDocument, MissionDocument, OriginDocument, RegionDocument, RiskDocument,
+    RiskObjectDocument,
+};
+
+pub use builtin::PAPER_SCENARIO;
+pub use change::{ChangeResult, MissionChange};
+pub use clock::MissionClock;
+pub use convert::{
+    guidance_document, guidance_gains, origin_frame, risk_field, safety_document, safety_params,
+};
+pub use error::MissionError;
+use scenario::{Scenario, ScenarioError};
+
+/// The mission: what to cover and how.
+#[derive(Debug, Clone)]
+pub struct Mission {
+    /// The WGS84 origin of the local plane, when geo-referenced; validated
+    /// ([`crate::geometry::geodesy::LocalFrame::new`]).
+    pub origin: Option<OriginDocument>,
+    pub region_doc: RegionDocument,
+    pub risk_doc: RiskDocument,
+    pub region: Region,
+    pub risk: RiskField,
+    pub actuator: ActuatorDocument,
+    pub guidance: GuidanceGains,
+    pub tick_hz: f64,
+    pub safety: SafetyParams,
+    /// The region's shore and route map with `safety`: rebuilt whenever
+    /// either changes, shared by the mission's clones.
+    pub layer: Arc<SafetyLayer>,
+}
+
+impl Mission {
+    /// The paper's scenario (region, risk, actuator), default guidance, 10 Hz.
+    pub fn paper() -> Mission {
+        let doc = crate::mission::scenario::parse_document(PAPER_SCENARIO)
+            .expect("built-in scenario parses");
+        let scenario = Scenario::from_document(&doc).expect("built-in scenario is valid");
+        let v = scenario.fleet.vessels()[0];
+        let mut risk_doc = doc.risk.clone().expect("paper has risk");
+        for (i, o) in risk_doc.objects.iter_mut().enumerate() {
+            o.id.get_or_insert_with(|| format!("object-{}", i + 1));
+        }
+        let layer = Arc::new(
+            SafetyLayer::new(&scenario.region, SafetyParams::default())
+                .expect("default safety parameters are valid"),
+        );
+        Mission {
+            origin: None,
+            region_doc: doc.region.clone().expect("paper has a region"),
+            risk_doc,
+            region: scenario.region,
+            risk: scenario.risk,
+            actuator: ActuatorDocument {
+                k: v.k,
+                beta: v.beta,
+            },
+            guidance: GuidanceGains::default(),
+            tick_hz: 10.0,
+            safety: SafetyParams::default(),
+            layer,
+        }
+    }
+
+    /// A mission from its document (a stored mission, a `--config` file),
+    /// validated as `evaluate` validates a scenario, plus the guidance gains
+    /// and the tick rate.
+    pub fn from_document(doc: &MissionDocument) -> Result<Mission, MissionError> {
+        let region = crate::mission::scenario::region_from_document(&doc.region)?;
+        let risk = risk_field(&doc.risk)?;
+        // The actuator is checked as a scenario's vessel would be.
+        Fleet::new(vec![Vessel {
+            position: Point { x: 0.0, y: 0.0 },
+            k: doc.actuator.k,
+            beta: doc.actuator.beta,
+        }])
+        .map_err(|e| MissionError::from(ScenarioError::from(e)))
+        .map_err(|e| MissionError::Invalid(format!("actuator: {e}")))?;
+        if !(doc.tick_hz.is_finite() && doc.tick_hz > 0.0 && doc.tick_hz <= 100.0) {
+            return Err(MissionError::Invalid("tick_hz: must be in (0, 100]".into()));
+        }
+        let mut risk_doc = doc.risk.clone();
+        let mut seen = std::collections::HashSet::new();
+        for (i, o) in risk_doc.objects.iter_mut().enumerate() {
+            let id = o.id.get_or_insert_with(|| format!("object-{}", i + 1));
+            if !crate::mission::scenario::valid_id(id) {
+                return Err(MissionError::Invalid(format!(
+                    "risk.objects[{i}].id: must match [A-Za-z0-9_.-]{{1,64}}"
+                )));
+            }
+            if !seen.insert(id.clone()) {
+                return Err(MissionError::Invalid(format!(
+                    "risk.objects[{i}].id: duplicate id {id:?}"
+                )));
+            }
+        }
+        let safety = safety_params(&doc.safety);
+        let layer = Arc::new(
+            SafetyLayer::new(&region, safety)
+                .map_err(|e| MissionError::from(ScenarioError::from(e)))?,
+        );
+        if let Some(o) = doc.origin {
+            origin_frame(o)?;
+        }
+        Ok(Mission {
+            origin: doc.origin,
+            region_doc: doc.region.clone(),
+            risk_doc,
+            region,
+            risk,
+            actuator: doc.actuator,
+            guidance: guidance_gains(&doc.guidance)?,
+            tick_hz: doc.tick_hz,
+            safety,
+            layer,
+        })
+    }
+
+    pub fn document(&self) -> MissionDocument {
+        MissionDocument {
+            origin: self.origin,
+            region: self.region_doc.clone(),
+            risk: self.risk_doc.clone(),
+            actuator: self.actuator,
+            guidance: guidance_document(&self.guidance),
+            tick_hz: self.tick_hz,
+            safety: safety_document(&self.safety),
+        }
+    }
+
+    /// The mission's risk objects, with ids.
+    pub fn objects(&self) -> &[RiskObjectDocument] {
+        &self.risk_doc.objects
+    }
+
+    pub fn mode(&self) -> GuidanceMode {
+        self.guidance.mode
+    }
+
+    /// The local plane of the mission's origin, when it has one.
+    pub fn frame(&self) -> Option<LocalFrame> {
+        // Validated when it was set (`from_document`, `changed`).
+        self.origin.and_then(|o| origin_frame(o).ok())
+    }
+}

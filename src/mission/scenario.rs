@@ -1,0 +1,308 @@
+//! Scenario documents in, evaluation documents out: the shell between
+//! [`crate::protocol`] and the pure [`crate::coverage`] engine.
+//!
+//! Every rejection is a [`ScenarioError`] whose message starts with the path of
+//! the offending field (`vessels[2].k`, `region.holes[0]`), so a user can fix
+//! the document without reading code.
+
+use std::collections::HashSet;
+
+use geo::Area;
+
+use crate::coverage::fleet::{DEFAULT_BETA, DEFAULT_K};
+use crate::coverage::{
+    CellGeometry, Evaluation, Fleet, InputError, Options, RiskField, RiskObject, Vessel, evaluate,
+};
+use crate::geometry::{Point, Region};
+use crate::protocol::{
+    CellDocument, ErrorDetail, ErrorDocument, EvaluationDocument, OriginDocument, RegionDocument,
+    RiskDocument, ScenarioDocument, VesselDocument, XY,
+};
+
+/// Why a scenario was rejected.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ScenarioError {
+    /// Not JSON, or not the document's shape.
+    #[error("malformed document: {0}")]
+    Malformed(String),
+    /// Well-formed, but a value is out of range or inconsistent.
+    #[error(transparent)]
+    Input(#[from] InputError),
+}
+
+impl ScenarioError {
+    /// Stable machine-readable code.
+    pub fn code(&self) -> &'static str {
+        match self {
+            ScenarioError::Malformed(_) => "malformed",
+            ScenarioError::Input(InputError::Unsupported { .. }) => "unsupported",
+            ScenarioError::Input(_) => "invalid",
+        }
+    }
+
+    /// The error as its wire document.
+    pub fn to_document(&self) -> ErrorDocument {
+        ErrorDocument {
+            error: ErrorDetail {
+                code: self.code().to_string(),
+                message: self.to_string(),
+            },
+        }
+    }
+}
+
+/// A validated scenario, ready for the engine.
+#[derive(Debug, Clone)]
+pub struct Scenario {
+    pub region: Region,
+    pub risk: RiskField,
+    pub fleet: Fleet,
+    /// Vessel ids, in the fleet's order.
+    pub ids: Vec<String>,
+}
+
+/// Whether `id` matches `[A-Za-z0-9_.-]{1,64}`.
+pub fn valid_id(id: &str) -> bool {
+    (1..=64).contains(&id.len())
+        && id
+            .bytes()
+            .all(|b| b.is_ascii_alphanumeric() || matches!(b, b'_' | b'.' | b'-'))
+}
+
+/// A scenario in the local plane: the document with whatever it gave in
+/// WGS84 placed in the plane of its origin (see [`crate::mission::georef::input`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LocalScenario {
+    /// The origin of the plane the document was placed in (its own, or the
+    /// fallback), if any.
+    pub origin: Option<OriginDocument>,
+    pub region: Option<RegionDocument>,
+    pub risk: Option<RiskDocument>,
+    pub vessels: Vec<VesselDocument>,
+}
+
+/// Parses a scenario document as written, without placing it.
+pub fn parse_input(text: &str) -> Result<ScenarioDocument, ScenarioError> {
+    serde_json::from_str(text).map_err(|e| ScenarioError::Malformed(e.to_string()))
+}
+
+/// Parses a scenario document and places it in the plane of its own origin.
+pub fn parse_document(text: &str) -> Result<LocalScenario, ScenarioError> {
+    localize(&parse_input(text)?, None)
+}
+
+/// Places a document's geographic parts in the plane of its origin, or of
+/// `fallback` when it has none (the server's mission origin).
+pub fn localize(
+    doc: &ScenarioDocument,
+    fallback: Option<OriginDocument>,
+) -> Result<LocalScenario, ScenarioError> {
+    use crate::mission::georef::input;
+    let origin = doc.origin.or(fallback);
+    let frame = input::frame(origin)?;
+    let frame = frame.as_ref();
+    Ok(LocalScenario {
+        origin,
+        region: doc
+            .region
+            .as_ref()
+            .map(|r| input::region(r, frame))
+            .transpose()?,
+        risk: doc
+            .risk
+            .as_ref()
+            .map(|r| input::risk(r, frame))
+            .transpose()?,
+        vessels: doc
+            .vessels
+            .iter()
+            .enumerate()
+            .map(|(i, v)| input::vessel(v, frame, &format!("vessels[{i}]")))
+            .collect::<Result<_, _>>()?,
+    })
+}
+
+fn points(ring: &[XY]) -> Vec<Point> {
+    ring.iter().map(|&[x, y]| Point { x, y }).collect()
+}
+
+/// Validates a region document.
+pub fn region_from_document(doc: &RegionDocument) -> Result<Region, ScenarioError> {
+    Ok(Region::new(
+        points(&doc.polygon),
+        doc.holes.iter().map(|h| points(h)).collect(),
+    )
+    .map_err(InputError::from)?)
+}
+
+impl Scenario {
+    /// Validates a document; `region` and `risk` must be present.
+    pub fn from_document(doc: &LocalScenario) -> Result<Self, ScenarioError> {
+        let region_doc = doc
+            .region
+            .as_ref()
+            .ok_or_else(|| InputError::invalid("region", "is required"))?;
+        let risk_doc = doc
+            .risk
+            .as_ref()
+            .ok_or_else(|| InputError::invalid("risk", "is required"))?;
+        let region = region_from_document(region_doc)?;
+
+        let mut object_ids = HashSet::new();
+        for (i, o) in risk_doc.objects.iter().enumerate() {
+            if let Some(id) = &o.id {
+                if !valid_id(id) {
+                    return Err(InputError::invalid(
+                        format!("risk.objects[{i}].id"),
+                        "must match [A-Za-z0-9_.-]{1,64}",
+                    )
+                    .into());
+                }
+                if !object_ids.insert(id.as_str()) {
+                    return Err(InputError::invalid(
+                        format!("risk.objects[{i}].id"),
+                        format!("duplicate id {id:?}"),
+                    )
+                    .into());
+                }
+            }
+        }
+        let risk = RiskField::new(
+            risk_doc.base,
+            risk_doc
+                .objects
+                .iter()
+                .map(|o| RiskObject {
+                    center: Point { x: o.x, y: o.y },
+                    alpha: o.alpha,
+                    sigma: o.sigma,
+                })
+                .collect(),
+        )?;
+
+        let mut ids = Vec::with_capacity(doc.vessels.len());
+        let mut seen = HashSet::new();
+        for (i, v) in doc.vessels.iter().enumerate() {
+            if !valid_id(&v.id) {
+                return Err(InputError::invalid(
+                    format!("vessels[{i}].id"),
+                    "must match [A-Za-z0-9_.-]{1,64}",
+                )
+                .into());
+            }
+            if !seen.insert(v.id.as_str()) {
+                return Err(InputError::invalid(
+                    format!("vessels[{i}].id"),
+                    format!("duplicate id {:?}", v.id),
+                )
+                .into());
+            }
+            if let Some(psi) = v.psi
+                && !psi.is_finite()
+            {
+                return Err(
+                    InputError::invalid(format!("vessels[{i}].psi"), "must be finite").into(),
+                );
+            }
+            ids.push(v.id.clone());
+        }
+        let fleet = Fleet::new(
+            doc.vessels
+                .iter()
+                .map(|v| Vessel {
+                    position: Point { x: v.x, y: v.y },
+                    k: v.k.unwrap_or(DEFAULT_K),
+                    beta: v.beta.unwrap_or(DEFAULT_BETA),
+                })
+                .collect(),
+        )?;
+        Ok(Scenario {
+            region,
+            risk,
+            fleet,
+            ids,
+        })
+    }
+
+    /// Runs the engine.
+    pub fn evaluate(&self, options: &Options) -> Evaluation {
+        evaluate(&self.region, &self.risk, &self.fleet, options)
+    }
+}
+
+fn xy(p: Point) -> XY {
+    [p.x, p.y]
+}
+
+fn ring_doc(ring: &geo::LineString<f64>) -> Vec<XY> {
+    let mut pts: Vec<XY> = ring.coords().map(|c| xy(*c)).collect();
+    if pts.len() > 1 && pts.first() == pts.last() {
+        pts.pop();
+    }
+    pts
+}
+
+/// The wire form of an evaluation over `region`.
+pub fn evaluation_document(
+    region: &Region,
+    ids: &[String],
+    evaluation: &Evaluation,
+) -> EvaluationDocument {
+    let cells = evaluation
+        .cells
+        .iter()
+        .zip(ids)
+        .map(|(c, id)| {
+            let (polygon, pieces) = match &c.geometry {
+                CellGeometry::Empty => (None, Vec::new()),
+                CellGeometry::Convex(p) => (
+                    Some(p.vertices.iter().map(|v| xy(*v)).collect()),
+                    Vec::new(),
+                ),
+                clipped @ CellGeometry::Clipped { .. } => {
+                    let mp = clipped.pieces(region);
+                    let largest =
+                        mp.0.iter()
+                            .max_by(|a, b| a.unsigned_area().total_cmp(&b.unsigned_area()))
+                            .map(|p| ring_doc(p.exterior()));
+                    let simple = mp.0.len() == 1 && mp.0[0].interiors().is_empty();
+                    let pieces = if simple {
+                        Vec::new()
+                    } else {
+                        mp.0.iter()
+                            .map(|p| RegionDocument {
+                                polygon: ring_doc(p.exterior()),
+                                holes: p.interiors().iter().map(ring_doc).collect(),
+                            })
+                            .collect()
+                    };
+                    (largest, pieces)
+                }
+            };
+            CellDocument {
+                id: id.clone(),
+                mass: c.mass,
+                centroid: xy(c.centroid),
+                area: c.area,
+                polygon,
+                pieces,
+                gradient: xy(c.gradient),
+            }
+        })
+        .collect();
+    EvaluationDocument {
+        h: evaluation.h,
+        cells,
+    }
+}
+
+/// Parses, validates and evaluates a scenario document given as text.
+pub fn evaluate_text(text: &str, options: &Options) -> Result<EvaluationDocument, ScenarioError> {
+    let doc = parse_document(text)?;
+    let scenario = Scenario::from_document(&doc)?;
+    Ok(evaluation_document(
+        &scenario.region,
+        &scenario.ids,
+        &scenario.evaluate(options),
+    ))
+}

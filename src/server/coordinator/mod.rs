@@ -1,0 +1,493 @@
+//! The coordinator's state and the tick task that owns it.
+//!
+//! Invariants:
+//! - one task ([`Coordinator::run`]) owns the mission and the fleet; links and
+//!   HTTP handlers talk to it through a bounded channel of [`Request`]s and
+//!   read the newest [`Snapshot`] from a `watch`; no lock is ever held across
+//!   an `.await`;
+//! - a tick that overruns makes the next ones be skipped
+//!   (`MissedTickBehavior::Skip`), never queued; skipped ticks keep their
+//!   numbers, so tick N is always mission time N / tick_hz and is due at
+//!   wall time origin + N / (tick_hz × time warp);
+//! - mission time is in mission seconds whatever the time warp, so guidance
+//!   filters and liveness are in mission seconds;
+//! - a tick is pipelined: once the partition is known, each vessel's cell,
+//!   goal, filter and command are computed on their own (on every core for
+//!   64 vessels or more) and the command is handed to its link as soon as it
+//!   is ready; cells, H and commands are bit for bit those of
+//!   [`evaluate`] and [`SafetyLayer::commands`](crate::control::safety::SafetyLayer::commands)
+//!   (the functions `seacover sim` calls);
+//! - the snapshot for readers is built after the tick's commands are
+//!   written (or half a period later at most), never while the links are
+//!   writing them.
+
+#[cfg(test)]
+mod tests;
+mod tick;
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::sync::Arc;
+use std::time::Duration;
+
+use axum::extract::ws::Utf8Bytes;
+use tokio::sync::{mpsc, oneshot, watch};
+use tokio_util::sync::CancellationToken;
+
+use super::error::ApiError;
+use super::store::Store;
+use crate::control::barrier::Scratch;
+use crate::control::guidance::{Agility, Guidance};
+use crate::control::model::State;
+use crate::coverage::evaluate::cell_figures;
+use crate::coverage::partition::power_cells_with;
+use crate::coverage::{CellResult, Evaluation, Fleet, Options, Vessel, evaluate};
+use crate::geometry::Point;
+use crate::mission::scenario::evaluation_document;
+use crate::mission::{ChangeResult, Mission, MissionChange, MissionClock};
+use crate::protocol::{
+    ActuatorDocument, AgilityDocument, CommandDocument, CoordinatorMessage, CoverageDocument,
+    PoseDocument, SnapshotDocument, VesselStatusDocument,
+};
+use crate::recorder::messages::{EventKind, EventRecord};
+use crate::recorder::{Entry as RecorderEntry, Recorder};
+
+/// What links and handlers ask of the tick task.
+#[derive(Debug)]
+pub enum Request {
+    /// A link said hello. The reply carries the tick rate.
+    Register {
+        id: String,
+        link: u64,
+        actuator: Option<ActuatorDocument>,
+        /// The vessel can thrust astern (its hello's `astern`, default
+        /// true); without, its guidance is ahead only.
+        astern: bool,
+        /// The command rates it can follow (its hello's `agility`).
+        agility: Option<AgilityDocument>,
+        tx: mpsc::Sender<Outgoing>,
+        /// The link's newest pose. A slot rather than a request per pose:
+        /// the tick only ever wants the newest, and 1000 vessels at 20 Hz
+        /// would otherwise wake this task 20,000 times a second.
+        poses: watch::Receiver<Option<PoseDocument>>,
+        reply: oneshot::Sender<Result<f64, ApiError>>,
+    },
+    /// A link closed.
+    Gone { id: String, link: u64 },
+    /// `DELETE /api/v1/vessels/{id}`: forget the vessel; its link, if any, is
+    /// told `removed` and closed.
+    Forget {
+        id: String,
+        reply: oneshot::Sender<Result<(), ApiError>>,
+    },
+    /// An operator's change to the mission; the reply is the changed
+    /// document's new state.
+    Change {
+        change: MissionChange,
+        reply: oneshot::Sender<Result<ChangeResult, ApiError>>,
+    },
+}
+
+pub use crate::protocol::Snapshot;
+
+/// Settings of the tick task.
+#[derive(Debug, Clone, Copy)]
+pub struct TickSettings {
+    /// Wall-clock speed-up (MOOS-IvP's time warp).
+    pub time_warp: f64,
+    /// A vessel silent longer than this (mission seconds) leaves the partition.
+    pub liveness: f64,
+}
+
+struct Link {
+    id: u64,
+    tx: mpsc::Sender<Outgoing>,
+    poses: watch::Receiver<Option<PoseDocument>>,
+}
+
+/// What the tick task hands a link to send.
+#[derive(Debug)]
+pub enum Outgoing {
+    /// A welcome or an error; an error closes the link.
+    Message(CoordinatorMessage),
+    /// A tick's command, serialized on the thread that computed it (the
+    /// link only frames and writes it).
+    Command {
+        text: Utf8Bytes,
+        /// When its tick was due, for `seacover_command_delay_seconds`.
+        due: std::time::Instant,
+        /// Dropped once the command is written or dropped: when the last of
+        /// a tick's is gone, the tick's fan-out is over and the tick task
+        /// publishes its snapshot (see [`Fanout`]).
+        written: mpsc::Sender<()>,
+    },
+}
+
+impl From<CoordinatorMessage> for Outgoing {
+    fn from(message: CoordinatorMessage) -> Self {
+        Outgoing::Message(message)
+    }
+}
+
+struct Entry {
+    actuator: ActuatorDocument,
+    link: Option<Link>,
+    pose: Option<PoseDocument>,
+    last_seen_tick: Option<u64>,
+    guidance: Guidance,
+    last_command: Option<CommandDocument>,
+}
+
+/// Takes a link's pose into its entry when the link has sent a new one since
+/// the last look; the vessel was then seen at `tick`.
+fn take_pose(entry: &mut Entry, poses: &mut watch::Receiver<Option<PoseDocument>>, tick: u64) {
+    let newest = poses.borrow_and_update();
+    if newest.has_changed()
+        && let Some(pose) = newest.as_ref()
+    {
+        entry.pose = Some(pose.clone());
+        entry.last_seen_tick = Some(tick);
+    }
+}
+
+/// What a tick computed, for [`Coordinator::finish_tick`].
+struct Published {
+    time: f64,
+    live: Vec<String>,
+    evaluation: Option<Evaluation>,
+}
+
+/// A tick whose commands are on their way. Its snapshot for dashboards is
+/// built once they are all written (or dropped), or at the deadline for a
+/// link that cannot keep up: building it takes milliseconds of a core that
+/// the links need while they write the tick's commands.
+struct Fanout {
+    published: Published,
+    /// Closed when the last command's `written` sender is dropped.
+    written: mpsc::Receiver<()>,
+    deadline: tokio::time::Instant,
+}
+
+/// The tick task.
+pub struct Coordinator {
+    mission: Mission,
+    settings: TickSettings,
+    vessels: BTreeMap<String, Entry>,
+    tick: u64,
+    snapshot: watch::Sender<Arc<Snapshot>>,
+    /// Where accepted changes are made durable before they are answered;
+    /// `None` keeps the mission in memory only (the demo).
+    store: Option<Store>,
+    /// Where ticks, mission changes and fleet events are recorded.
+    recorder: Recorder,
+    /// When tick 1 is due (its origin plus one period).
+    clock: Option<MissionClock>,
+    /// The previous tick's partition, to see who leaves it and who returns.
+    live_before: BTreeSet<String>,
+    /// Vessels that left the partition by falling silent, until heard again.
+    lapsed: BTreeSet<String>,
+}
+
+impl Coordinator {
+    pub fn new(
+        mission: Mission,
+        settings: TickSettings,
+        store: Option<Store>,
+    ) -> (Coordinator, watch::Receiver<Arc<Snapshot>>) {
+        let empty = Arc::new(Snapshot {
+            document: SnapshotDocument {
+                tick: 0,
+                time: 0.0,
+                h: 0.0,
+                mission: mission.document(),
+                vessels: Vec::new(),
+            },
+            coverage: CoverageDocument {
+                tick: 0,
+                time: 0.0,
+                h: 0.0,
+                cells: Vec::new(),
+            },
+        });
+        let (tx, rx) = watch::channel(empty);
+        (
+            Coordinator {
+                mission,
+                settings,
+                vessels: BTreeMap::new(),
+                tick: 0,
+                snapshot: tx,
+                store,
+                recorder: Recorder::off(),
+                clock: None,
+                live_before: BTreeSet::new(),
+                lapsed: BTreeSet::new(),
+            },
+            rx,
+        )
+    }
+
+    /// Records to `recorder`, with ticks due on `clock`; the mission as it
+    /// starts is the recording's first message.
+    pub fn recording(mut self, recorder: Recorder, clock: MissionClock) -> Coordinator {
+        recorder.mission(0.0, self.mission.document());
+        self.recorder = recorder;
+        self.clock = Some(clock);
+        self
+    }
+
+    /// Runs until `shutdown`; then tells every vessel and returns.
+    pub async fn run(mut self, mut requests: mpsc::Receiver<Request>, shutdown: CancellationToken) {
+        let period =
+            Duration::from_secs_f64(1.0 / (self.mission.tick_hz * self.settings.time_warp));
+        // Tick 1 is due one period after the clock's origin (at once when
+        // there is no clock), so what links record on the clock and what
+        // ticks record agree.
+        let first = self
+            .clock
+            .map_or_else(tokio::time::Instant::now, |c| (c.origin + period).into());
+        let mut ticker = tokio::time::interval_at(first, period);
+        ticker.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Skip);
+        // Tick N is due at origin + N × period (the interval's first tick,
+        // tick 1, fires at once). Published so that a client on the same
+        // host can measure a command's delay from the moment its tick was
+        // due, exactly, rather than estimate it (`seacover bench load`).
+        let origin = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0.0, |d| d.as_secs_f64())
+            - period.as_secs_f64();
+        metrics::gauge!(super::metrics::TICK_ORIGIN).set(origin);
+        metrics::gauge!(super::metrics::TICK_PERIOD).set(period.as_secs_f64());
+        let mut last: Option<tokio::time::Instant> = None;
+        let mut fanout: Option<Fanout> = None;
+        loop {
+            tokio::select! {
+                _ = shutdown.cancelled() => break,
+                due = ticker.tick() => {
+                    if let Some(previous) = fanout.take() {
+                        self.finish_tick(previous.published);
+                    }
+                    // Ticks the interval skipped because one overran keep
+                    // their numbers: tick N always means mission time
+                    // N / tick_hz, whatever the load.
+                    let advance = match last {
+                        Some(prev) => ((due - prev).as_secs_f64() / period.as_secs_f64()).round().max(1.0) as u64,
+                        None => 1,
+                    };
+                    if advance > 1 {
+                        metrics::counter!(super::metrics::TICKS_SKIPPED).increment(advance - 1);
+                    }
+                    last = Some(due);
+                    let started = std::time::Instant::now();
+                    let (written_tx, written) = mpsc::channel(1);
+                    let published = self.on_tick(advance, due.into_std(), written_tx);
+                    metrics::histogram!(super::metrics::TICK_SECONDS).record(started.elapsed().as_secs_f64());
+                    fanout = Some(Fanout { published, written, deadline: due + period / 2 });
+                }
+                () = async {
+                    match fanout.as_mut() {
+                        Some(f) => {
+                            tokio::select! {
+                                _ = f.written.recv() => {}
+                                _ = tokio::time::sleep_until(f.deadline) => {}
+                            }
+                        }
+                        None => std::future::pending().await,
+                    }
+                } => {
+                    if let Some(done) = fanout.take() {
+                        self.finish_tick(done.published);
+                    }
+                }
+                request = requests.recv() => match request {
+                    Some(r) => {
+                        if self.on_request(r) {
+                            // A change published a newer snapshot.
+                            fanout = None;
+                        }
+                    }
+                    None => break,
+                },
+            }
+        }
+        for entry in self.vessels.values() {
+            if let Some(link) = &entry.link {
+                let _ = link.tx.try_send(
+                    CoordinatorMessage::Error {
+                        code: ApiError::ShuttingDown.code().to_string(),
+                        message: ApiError::ShuttingDown.to_string(),
+                    }
+                    .into(),
+                );
+            }
+        }
+        self.recorder
+            .event(EventRecord::new(self.time(), EventKind::Shutdown));
+    }
+
+    /// Mission time of the current tick [s].
+    fn time(&self) -> f64 {
+        self.tick as f64 / self.mission.tick_hz
+    }
+
+    /// Serves one request; `true` when it published a snapshot.
+    fn on_request(&mut self, request: Request) -> bool {
+        match request {
+            Request::Register {
+                id,
+                link,
+                actuator,
+                astern,
+                agility,
+                tx,
+                poses,
+                reply,
+            } => {
+                let actuator = actuator.unwrap_or(self.mission.actuator);
+                let agility = match agility {
+                    None => Agility::UNDECLARED,
+                    Some(a) => {
+                        let ok = |x: f64| x.is_finite() && x > 0.0;
+                        if !(ok(a.yaw_accel) && ok(a.surge_accel)) {
+                            let _ = reply.send(Err(ApiError::Invalid(
+                                "agility: yaw_accel and surge_accel must be finite numbers > 0"
+                                    .into(),
+                            )));
+                            return false;
+                        }
+                        Agility {
+                            yaw_accel: a.yaw_accel,
+                            surge_accel: a.surge_accel,
+                        }
+                    }
+                };
+                if !(actuator.k.is_finite() && actuator.k > 0.0) {
+                    let _ = reply.send(Err(ApiError::Invalid(
+                        "actuator.k: must be a finite number > 0".into(),
+                    )));
+                    return false;
+                }
+                if actuator.beta != self.mission.actuator.beta {
+                    let _ = reply.send(Err(ApiError::Unsupported(format!(
+                        "actuator.beta: the mission's vessels share beta = {}; different beta give curved cell edges",
+                        self.mission.actuator.beta
+                    ))));
+                    return false;
+                }
+                if !self.vessels.contains_key(&id)
+                    && self.vessels.len() >= crate::coverage::fleet::MAX_VESSELS
+                {
+                    let _ = reply.send(Err(ApiError::Conflict(format!(
+                        "the mission already has {} vessels, the most it takes",
+                        crate::coverage::fleet::MAX_VESSELS
+                    ))));
+                    return false;
+                }
+                let gains = self.mission.guidance;
+                let entry = self.vessels.entry(id).or_insert_with(|| Entry {
+                    actuator,
+                    link: None,
+                    pose: None,
+                    last_seen_tick: None,
+                    guidance: Guidance::new(gains),
+                    last_command: None,
+                });
+                if let Some(old) = entry.link.take() {
+                    let _ = old.tx.try_send(
+                        CoordinatorMessage::Error {
+                            code: "replaced".into(),
+                            message: "another link for this vessel connected".into(),
+                        }
+                        .into(),
+                    );
+                }
+                entry.actuator = actuator;
+                entry.guidance.ahead_only = !astern;
+                entry.guidance.agility = agility;
+                entry.link = Some(Link {
+                    id: link,
+                    tx,
+                    poses,
+                });
+                let _ = reply.send(Ok(self.mission.tick_hz));
+                false
+            }
+            Request::Change { change, reply } => {
+                let outcome = self
+                    .mission
+                    .changed(&change)
+                    .map_err(ApiError::from)
+                    .and_then(|(next, answer)| {
+                        // Durable first, applied second: a change the store
+                        // refuses is not applied, and one that is answered
+                        // survives a crash. The commit blocks this task for one
+                        // fsync (a few ms); writes are rate-limited, so the tick
+                        // loses at most that, and changes stay in one order.
+                        if let Some(store) = &self.store {
+                            store.apply(&change, &answer).map_err(|e| {
+                                tracing::error!(error = %e, "a mission change could not be stored");
+                                ApiError::Storage(e.to_string())
+                            })?;
+                        }
+                        self.mission = next;
+                        Ok(answer)
+                    });
+                if outcome.is_ok() {
+                    self.recorder.mission(self.time(), self.mission.document());
+                }
+                let changed = outcome.is_ok();
+                if changed {
+                    // Readers see the write at once, not at the next tick.
+                    let time = self.tick as f64 / self.mission.tick_hz;
+                    let live = self.live_ids();
+                    let evaluation = self.evaluate_live(&live);
+                    self.publish(time, &live, evaluation.as_ref());
+                }
+                let _ = reply.send(outcome);
+                changed
+            }
+            Request::Forget { id, reply } => {
+                let outcome = match self.vessels.remove(&id) {
+                    Some(entry) => {
+                        self.recorder.event(
+                            EventRecord::new(self.time(), EventKind::VesselRemoved)
+                                .vessel(id.clone()),
+                        );
+                        self.live_before.remove(&id);
+                        self.lapsed.remove(&id);
+                        if let Some(link) = entry.link {
+                            let _ = link.tx.try_send(
+                                CoordinatorMessage::Error {
+                                    code: "removed".into(),
+                                    message: "an operator removed this vessel from the mission"
+                                        .into(),
+                                }
+                                .into(),
+                            );
+                        }
+                        let time = self.tick as f64 / self.mission.tick_hz;
+                        let live = self.live_ids();
+                        let evaluation = self.evaluate_live(&live);
+                        self.publish(time, &live, evaluation.as_ref());
+                        Ok(())
+                    }
+                    None => Err(ApiError::NotFound(format!("no vessel {id:?}"))),
+                };
+                let forgotten = outcome.is_ok();
+                let _ = reply.send(outcome);
+                forgotten
+            }
+            Request::Gone { id, link } => {
+                let tick = self.tick;
+                if let Some(entry) = self.vessels.get_mut(&id)
+                    && entry.link.as_ref().is_some_and(|l| l.id == link)
+                {
+                    // A pose sent just before the link closed still counts.
+                    if let Some(mut link) = entry.link.take() {
+                        take_pose(entry, &mut link.poses, tick);
+                    }
+                }
+                false
+            }
+        }
+    }
+}

@@ -1,0 +1,195 @@
+//! The tick held to `evaluate` and `SafetyLayer::commands`, bit for bit.
+
+use super::*;
+use crate::control::Vec3;
+
+/// A coordinator of `mission` in real time, with no store. (Its
+/// snapshots go to no reader: publishing needs none.)
+fn coordinator(mission: &Mission) -> Coordinator {
+    let settings = TickSettings {
+        time_warp: 1.0,
+        liveness: 3.0,
+    };
+    Coordinator::new(mission.clone(), settings, None).0
+}
+
+/// Registers a vessel through the same request a link sends; returns
+/// its pose slot and command queue.
+fn register(
+    c: &mut Coordinator,
+    id: &str,
+    link: u64,
+) -> (
+    watch::Sender<Option<PoseDocument>>,
+    mpsc::Receiver<Outgoing>,
+) {
+    let (tx, rx) = mpsc::channel(16);
+    let (pose_tx, poses) = watch::channel(None);
+    let (reply, answer) = oneshot::channel();
+    c.on_request(Request::Register {
+        id: id.into(),
+        link,
+        actuator: None,
+        astern: true,
+        agility: None,
+        tx,
+        poses,
+        reply,
+    });
+    assert!(answer.blocking_recv().unwrap().is_ok());
+    (pose_tx, rx)
+}
+
+fn pose(x: f64, y: f64, psi: f64, u: f64) -> PoseDocument {
+    serde_json::from_value(serde_json::json!({
+        "t": 0.0, "x": x, "y": y, "psi": psi, "u": u, "v": 0.0, "r": 0.0
+    }))
+    .unwrap()
+}
+
+/// Asserts that a tick's cells and H are `evaluate`'s for the vessels
+/// at `states` with the mission's actuator.
+fn assert_is_the_evaluation(mission: &Mission, states: &[State], eval: &Evaluation) {
+    let fleet = Fleet::new(
+        states
+            .iter()
+            .map(|s| Vessel {
+                position: Point { x: s.x, y: s.y },
+                k: mission.actuator.k,
+                beta: mission.actuator.beta,
+            })
+            .collect(),
+    )
+    .unwrap();
+    assert_eq!(
+        eval,
+        &evaluate(&mission.region, &mission.risk, &fleet, &Options::default())
+    );
+}
+
+/// The command waiting on a link's queue (`what` names it in failures).
+fn command(rx: &mut mpsc::Receiver<Outgoing>, what: &str) -> CommandDocument {
+    let Ok(Outgoing::Command { text, .. }) = rx.try_recv() else {
+        panic!("{what}: no command");
+    };
+    let Ok(CoordinatorMessage::Command(got)) = serde_json::from_str(&text) else {
+        panic!("{what}: not a command: {text}");
+    };
+    got
+}
+
+/// The tick's commands are exactly the safety layer's for the same poses
+/// and cells (the function `seacover sim` calls), over several ticks, and
+/// two vessels closing head on inside the safety distance make the
+/// filter act.
+#[test]
+fn tick_commands_are_the_safety_layers() {
+    let mission = Mission::paper();
+    let mut c = coordinator(&mission);
+    let starts = [
+        ("usv-1", 40.0, 50.0, 0.0, 1.2),
+        ("usv-2", 45.0, 50.0, std::f64::consts::PI, 1.2),
+        ("usv-3", 20.0, 80.0, 1.0, 0.3),
+    ];
+    let mut links: Vec<_> = starts
+        .iter()
+        .enumerate()
+        .map(|(i, s)| register(&mut c, s.0, i as u64))
+        .collect();
+    let mut local: Vec<Guidance> = starts
+        .iter()
+        .map(|_| Guidance::new(mission.guidance))
+        .collect();
+    let mut intervened = 0;
+    for tick in 0..3 {
+        let states: Vec<State> = starts
+            .iter()
+            .map(|s| State {
+                x: s.1 + 0.1 * tick as f64,
+                y: s.2,
+                psi: s.3,
+                vel: Vec3::new(s.4, 0.0, 0.0),
+            })
+            .collect();
+        for ((pose_tx, _), s) in links.iter().zip(&states) {
+            pose_tx.send_replace(Some(pose(s.x, s.y, s.psi, s.vel.x)));
+        }
+        let (written_tx, mut written) = mpsc::channel(1);
+        let published = c.on_tick(1, std::time::Instant::now(), written_tx);
+        let eval = published.evaluation.as_ref().unwrap();
+        // The pipelined tick's cells and H are the evaluation's.
+        assert_is_the_evaluation(&mission, &states, eval);
+        let expected = mission
+            .layer
+            .commands(published.time, &states, &eval.cells, &mut local);
+        intervened += expected.iter().filter(|s| s.intervened).count();
+        for ((_, rx), want) in links.iter_mut().zip(&expected) {
+            let got = command(rx, &format!("tick {tick}"));
+            assert_eq!(got.tick, tick + 1);
+            assert_eq!(
+                (got.u_d, got.r_d, got.e),
+                (want.command.u_d, want.command.r_d, want.command.e),
+                "tick {tick}"
+            );
+        }
+        // Every command was taken (and its guard dropped with it): the
+        // fan-out is over.
+        assert_eq!(
+            written.try_recv(),
+            Err(mpsc::error::TryRecvError::Disconnected)
+        );
+    }
+    assert!(
+        intervened >= 2,
+        "the head-on pair never triggered the filter"
+    );
+}
+
+/// A fleet large enough for the tick to run on every core: its cells, H
+/// and every command are still exactly those of `evaluate` and the
+/// safety layer, and each link gets its own vessel's command.
+#[test]
+fn a_large_fleets_parallel_tick_is_the_evaluation_and_the_safety_layer() {
+    let mission = Mission::paper();
+    let mut c = coordinator(&mission);
+    let n = 2 * crate::coverage::PARALLEL_MIN;
+    // Ids in the coordinator's (id) order.
+    let ids: Vec<String> = (0..n).map(|i| format!("usv-{i:03}")).collect();
+    let mut links: Vec<_> = ids
+        .iter()
+        .enumerate()
+        .map(|(i, id)| register(&mut c, id, i as u64))
+        .collect();
+    let states: Vec<State> = (0..n)
+        .map(|i| State {
+            x: 5.0 + 90.0 * ((i * 37) % n) as f64 / n as f64,
+            y: 5.0 + 90.0 * (i % 16) as f64 / 16.0,
+            psi: 0.1 * i as f64,
+            vel: Vec3::new(0.5, 0.0, 0.0),
+        })
+        .collect();
+    for ((pose_tx, _), s) in links.iter().zip(&states) {
+        pose_tx.send_replace(Some(pose(s.x, s.y, s.psi, s.vel.x)));
+    }
+    let (written_tx, _written) = mpsc::channel(1);
+    let published = c.on_tick(1, std::time::Instant::now(), written_tx);
+    let eval = published.evaluation.as_ref().unwrap();
+    assert_is_the_evaluation(&mission, &states, eval);
+    let mut local: Vec<Guidance> = (0..n).map(|_| Guidance::new(mission.guidance)).collect();
+    let expected = mission
+        .layer
+        .commands(published.time, &states, &eval.cells, &mut local);
+    for (i, ((_, rx), want)) in links.iter_mut().zip(&expected).enumerate() {
+        let got = command(rx, &format!("vessel {i}"));
+        assert_eq!(
+            (got.u_d, got.r_d, got.e, got.centroid),
+            (
+                want.command.u_d,
+                want.command.r_d,
+                want.command.e,
+                [eval.cells[i].centroid.x, eval.cells[i].centroid.y]
+            ),
+            "vessel {i}"
+        );
+    }
+}

@@ -1,0 +1,304 @@
+//! The tick: collect the newest poses, partition, then each vessel's cell,
+//! goal, safety filter and command on its own (on every core from 64
+//! vessels), each command handed to its link as soon as it is ready; the
+//! snapshot for readers is built once the commands are written.
+
+use std::collections::BTreeSet;
+use std::sync::Arc;
+
+use tokio::sync::mpsc;
+
+use super::*;
+
+impl Coordinator {
+    /// Takes every link's newest pose, if it has a new one.
+    pub(super) fn collect_poses(&mut self) {
+        let tick = self.tick;
+        for entry in self.vessels.values_mut() {
+            if let Some(mut link) = entry.link.take() {
+                take_pose(entry, &mut link.poses, tick);
+                entry.link = Some(link);
+            }
+        }
+    }
+
+    pub(super) fn is_live(&self, entry: &Entry) -> bool {
+        let window = (self.settings.liveness * self.mission.tick_hz).round() as u64;
+        entry.pose.is_some()
+            && entry
+                .last_seen_tick
+                .is_some_and(|t| self.tick - t <= window)
+    }
+
+    /// Ids of the vessels in the partition, in id order.
+    pub(super) fn live_ids(&self) -> Vec<String> {
+        self.vessels
+            .iter()
+            .filter(|(_, e)| self.is_live(e))
+            .map(|(id, _)| id.clone())
+            .collect()
+    }
+
+    /// One tick, `advance` ticks after the previous one (more than one when
+    /// the interval skipped some), due at `due`.
+    ///
+    /// Pipelined: after the partition (which needs every position), each
+    /// vessel's cell figures, goal, filter and command are computed on their
+    /// own (on every core for large fleets) and the command is serialized
+    /// and handed to its link at once, so the first commands are on the
+    /// wire while the last are still being computed. Each handed command
+    /// holds a clone of `written`. The cells and H are those of
+    /// [`evaluate`], and the commands those of
+    /// [`SafetyLayer::commands`](crate::control::safety::SafetyLayer::commands),
+    /// bit for bit.
+    pub(super) fn on_tick(
+        &mut self,
+        advance: u64,
+        due: std::time::Instant,
+        written: mpsc::Sender<()>,
+    ) -> Published {
+        self.tick += advance;
+        self.collect_poses();
+        let time = self.tick as f64 / self.mission.tick_hz;
+        let live = self.live_ids();
+        self.note_liveness(time, &live);
+        let Some(fleet) = self.fleet(&live) else {
+            return Published {
+                time,
+                live,
+                evaluation: None,
+            };
+        };
+        // The live entries, in `live`'s order (both are in id order).
+        let mut wanted = live.iter().peekable();
+        let mut entries: Vec<&mut Entry> = Vec::with_capacity(live.len());
+        for (id, entry) in self.vessels.iter_mut() {
+            if wanted.next_if(|w| *w == id).is_some() {
+                entries.push(entry);
+            }
+        }
+        let states: Vec<State> = entries
+            .iter()
+            .map(|entry| {
+                let pose = entry.pose.as_ref().expect("live vessels have a pose");
+                State {
+                    x: pose.x,
+                    y: pose.y,
+                    psi: pose.psi,
+                    vel: crate::control::Vec3::new(pose.u, pose.v, pose.r),
+                }
+            })
+            .collect();
+        let mission = &self.mission;
+        let options = Options {
+            parallel: true,
+            ..Options::default()
+        };
+        let parallel = entries.len() >= crate::coverage::PARALLEL_MIN;
+        let geometries = power_cells_with(&mission.region, &fleet, parallel);
+        // Goals inside the vessel's own piece of water, routes round islands
+        // and the collision filter: the same functions as `seacover sim`.
+        let layer = &mission.layer;
+        let safety = {
+            let guidance: Vec<&Guidance> = entries.iter().map(|e| &e.guidance).collect();
+            layer.prepare(time, &states, &guidance)
+        };
+        let tick = self.tick;
+        let one = |i: usize,
+                   entry: &mut Entry,
+                   geometry,
+                   (near, scratch): &mut (Vec<usize>, Scratch)|
+         -> (CellResult, bool) {
+            let vessel = &fleet.vessels()[i];
+            let cell = cell_figures(
+                &mission.region,
+                &mission.risk,
+                vessel,
+                fleet.beta(),
+                geometry,
+                &options,
+                near,
+            );
+            let sc = layer.command(&safety, i, &states[i], &cell, &mut entry.guidance, scratch);
+            let (cmd, c) = (sc.command, cell.centroid);
+            let doc = CommandDocument {
+                tick,
+                u_d: cmd.u_d,
+                r_d: cmd.r_d,
+                u_d_dot: cmd.u_d_dot,
+                r_d_dot: cmd.r_d_dot,
+                centroid: [c.x, c.y],
+                e: cmd.e,
+                psi_e: cmd.psi_e,
+            };
+            if let Some(link) = &entry.link {
+                let text = serde_json::to_string(&CoordinatorMessage::Command(doc.clone()))
+                    .expect("commands serialize");
+                // A link that cannot keep up misses this command; the next
+                // one supersedes it anyway.
+                let sent = link.tx.try_send(Outgoing::Command {
+                    text: Utf8Bytes::from(text),
+                    due,
+                    written: written.clone(),
+                });
+                if sent.is_err() {
+                    metrics::counter!(crate::server::metrics::MESSAGES_REJECTED, "reason" => "link_full")
+                        .increment(1);
+                }
+            }
+            entry.last_command = Some(doc);
+            (cell, sc.intervened)
+        };
+        let done: Vec<(CellResult, bool)> = crate::coverage::map_each(
+            entries.into_iter().zip(geometries).collect(),
+            parallel,
+            |i, (entry, geometry), scratch| one(i, entry, geometry, scratch),
+        );
+        let interventions = done.iter().filter(|(_, intervened)| *intervened).count();
+        metrics::counter!(crate::server::metrics::SAFETY_INTERVENTIONS)
+            .increment(interventions as u64);
+        let cells: Vec<CellResult> = done.into_iter().map(|(cell, _)| cell).collect();
+        let h = cells.iter().map(|c| c.mass).sum();
+        Published {
+            time,
+            live,
+            evaluation: Some(Evaluation { h, cells }),
+        }
+    }
+
+    /// Records who left the partition by falling silent (the others take
+    /// their water) and who came back.
+    pub(super) fn note_liveness(&mut self, time: f64, live: &[String]) {
+        if !self.recorder.is_on() {
+            return;
+        }
+        let now: BTreeSet<String> = live.iter().cloned().collect();
+        for gone in self.live_before.difference(&now) {
+            if self.vessels.contains_key(gone) {
+                self.recorder.event(
+                    EventRecord::new(time, EventKind::LivenessTakeover).vessel(gone.clone()),
+                );
+                self.lapsed.insert(gone.clone());
+            }
+        }
+        for back in now.difference(&self.live_before) {
+            if self.lapsed.remove(back) {
+                self.recorder.event(
+                    EventRecord::new(time, EventKind::LivenessRegained).vessel(back.clone()),
+                );
+            }
+        }
+        self.live_before = now;
+    }
+
+    /// The second half of a tick, once its commands are on their way: the
+    /// snapshot for readers and the gauges.
+    pub(super) fn finish_tick(&mut self, tick: Published) {
+        let Published {
+            time,
+            live,
+            evaluation,
+        } = tick;
+        self.publish(time, &live, evaluation.as_ref());
+        let connected = self.vessels.values().filter(|e| e.link.is_some()).count();
+        metrics::gauge!(crate::server::metrics::VESSELS_CONNECTED).set(connected as f64);
+        metrics::gauge!(crate::server::metrics::VESSELS_LIVE).set(live.len() as f64);
+        metrics::gauge!(crate::server::metrics::COVERAGE_H)
+            .set(evaluation.as_ref().map_or(0.0, |e| e.h));
+    }
+
+    /// The fleet of the `live` vessels, in that order; `None` when there
+    /// are none.
+    pub(super) fn fleet(&self, live: &[String]) -> Option<Fleet> {
+        if live.is_empty() {
+            return None;
+        }
+        let vessels = live
+            .iter()
+            .map(|id| {
+                let e = &self.vessels[id];
+                let p = e.pose.as_ref().expect("live vessels have a pose");
+                Vessel {
+                    position: Point { x: p.x, y: p.y },
+                    k: e.actuator.k,
+                    beta: e.actuator.beta,
+                }
+            })
+            .collect();
+        Fleet::new(vessels).ok()
+    }
+
+    pub(super) fn evaluate_live(&self, live: &[String]) -> Option<Evaluation> {
+        let fleet = self.fleet(live)?;
+        Some(evaluate(
+            &self.mission.region,
+            &self.mission.risk,
+            &fleet,
+            &Options {
+                parallel: true,
+                ..Options::default()
+            },
+        ))
+    }
+
+    pub(super) fn publish(&self, time: f64, live: &[String], evaluation: Option<&Evaluation>) {
+        let h = evaluation.map_or(0.0, |e| e.h);
+        let coverage = match evaluation {
+            Some(e) => {
+                let doc = evaluation_document(&self.mission.region, live, e);
+                CoverageDocument {
+                    tick: self.tick,
+                    time,
+                    h,
+                    cells: doc.cells,
+                }
+            }
+            None => CoverageDocument {
+                tick: self.tick,
+                time,
+                h,
+                cells: Vec::new(),
+            },
+        };
+        // An index rather than a search per vessel, which made publishing
+        // quadratic: milliseconds of a 1000-vessel tick, holding a worker
+        // thread while the links were sending that tick's commands.
+        let cells: std::collections::HashMap<&str, &crate::protocol::CellDocument> =
+            coverage.cells.iter().map(|c| (c.id.as_str(), c)).collect();
+        let vessels = self
+            .vessels
+            .iter()
+            .map(|(id, e)| {
+                let cell = cells.get(id.as_str()).copied();
+                VesselStatusDocument {
+                    id: id.clone(),
+                    connected: e.link.is_some(),
+                    live: cell.is_some(),
+                    controlled: e.pose.as_ref().and_then(|p| p.controlled).unwrap_or(true),
+                    pose: e.pose.clone(),
+                    actuator: e.actuator,
+                    polygon: cell.and_then(|c| c.polygon.clone()),
+                    mass: cell.map_or(0.0, |c| c.mass),
+                    centroid: cell.map(|c| c.centroid),
+                    last_command: e.last_command.clone(),
+                    last_seen: e.last_seen_tick.map(|t| t as f64 / self.mission.tick_hz),
+                }
+            })
+            .collect();
+        let snapshot = Snapshot {
+            document: SnapshotDocument {
+                tick: self.tick,
+                time,
+                h,
+                mission: self.mission.document(),
+                vessels,
+            },
+            coverage,
+        };
+        let snapshot = Arc::new(snapshot);
+        if self.recorder.is_on() {
+            self.recorder.record(RecorderEntry::Tick(snapshot.clone()));
+        }
+        self.snapshot.send_replace(snapshot);
+    }
+}

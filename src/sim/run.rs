@@ -1,0 +1,289 @@
+//! The closed loop itself, pure and deterministic for a seed: dynamics,
+//! observer and controller at the dynamics step, coverage and guidance at
+//! the tick, and what it records ([`Run`]).
+
+use super::config::{Config, SimError};
+use super::monitor::{Monitor, SafetyRecord};
+use crate::control::controller::control;
+use crate::control::disturbance::Disturbance;
+use crate::control::guidance::{Command, Guidance};
+use crate::control::model::{State, step};
+use crate::control::observer::{Observer, ObserverGains};
+use crate::control::reference::{Governor, Line, Peaks, agility};
+use crate::control::safety::SafetyLayer;
+use crate::control::{Vec3, lloyd};
+use crate::coverage::{CellGeometry, Fleet, Options, Vessel, evaluate};
+use crate::geometry::Point;
+
+/// One vessel at one tick.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VesselSample {
+    pub state: State,
+    pub command: Command,
+    pub centroid: Point,
+    /// The reachable goal the vessel steers for (the centroid, projected).
+    pub goal: Point,
+    /// Whether the safety filter changed this tick's command.
+    pub intervened: bool,
+    pub tau_d: Vec3,
+    pub estimate: Vec3,
+    /// The reference the controller tracks at this instant (the on-board
+    /// governor's output; see `control::reference`).
+    pub reference: (f64, f64),
+    /// The largest tracking errors (u − u_ref, r − r_ref, signed) at any
+    /// dynamics step since the previous tick: what Fig. 2 plots, so that
+    /// nothing between ticks is hidden.
+    pub peak_error: (f64, f64),
+}
+
+/// The fleet at one tick.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Tick {
+    pub t: f64,
+    pub h: f64,
+    pub lloyd_h: f64,
+    pub vessels: Vec<VesselSample>,
+    pub lloyd_positions: Vec<Point>,
+}
+
+/// The partition kept at a snapshot time.
+#[derive(Debug, Clone)]
+pub struct Snapshot {
+    pub t: f64,
+    pub cells: Vec<CellGeometry>,
+}
+
+/// Figures measured over the whole run at the dynamics step.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Measures {
+    pub observer_error_max_after_10s: f64,
+    pub u_error_max_after_20s: f64,
+    pub r_error_max_after_20s: f64,
+    /// Largest gap after 20 s between the command line and the reference
+    /// the on-board governor gave the controller (what it held back as
+    /// more than the hull could do; see `control::reference`).
+    pub u_lag_max_after_20s: f64,
+    pub r_lag_max_after_20s: f64,
+    /// Last time any observer error exceeded 0.05.
+    pub t1_observer: f64,
+}
+
+/// A finished run.
+#[derive(Debug, Clone)]
+pub struct Run {
+    pub ticks: Vec<Tick>,
+    pub snapshots: Vec<Snapshot>,
+    pub measures: Measures,
+    /// Collisions, incursions, closest approaches and interventions.
+    pub safety: SafetyRecord,
+}
+
+pub(super) fn fleet_at(config: &Config, positions: impl Iterator<Item = Point>) -> Option<Fleet> {
+    let beta = config.scenario.fleet.beta();
+    let vessels = positions
+        .zip(config.scenario.fleet.vessels())
+        .map(|(position, v)| Vessel {
+            position,
+            k: v.k,
+            beta,
+        })
+        .collect();
+    Fleet::new(vessels).ok()
+}
+
+/// Runs the closed loop. `progress` is called with the fraction done.
+pub fn run(config: &Config, mut progress: impl FnMut(f64)) -> Result<Run, SimError> {
+    let n = config.scenario.fleet.len();
+    let region = &config.scenario.region;
+    let risk = &config.scenario.risk;
+    let options = Options::default();
+    let disturbances: Vec<Disturbance> = (0..n)
+        .map(|i| config.disturbance.model(i, config.seed))
+        .collect();
+    // Paper Assumption 2: b₂ must exceed |τ̇_d|, which for a force fixed in
+    // the earth frame grows with the turn rate the guidance may ask for.
+    let rate = disturbances
+        .iter()
+        .map(|d| d.rate_bound(config.guidance.max_yaw_rate).amax())
+        .fold(0.0, f64::max);
+    let observer_gains = if ObserverGains::for_rate(rate).b2 > config.observer.b2 {
+        ObserverGains::for_rate(rate)
+    } else {
+        config.observer
+    };
+    let mut states: Vec<State> = config
+        .scenario
+        .fleet
+        .vessels()
+        .iter()
+        .zip(&config.headings)
+        .map(|(v, &psi)| State {
+            x: v.position.x,
+            y: v.position.y,
+            psi,
+            vel: Vec3::zeros(),
+        })
+        .collect();
+    let mut observers: Vec<Observer> = (0..n)
+        .map(|_| Observer::new(config.vessel, observer_gains))
+        .collect();
+    // Each simulated vessel declares what its governor can follow, as the
+    // networked one does in its hello.
+    let mut guidance: Vec<Guidance> = (0..n)
+        .map(|_| {
+            let mut g = Guidance::new(config.guidance);
+            g.agility = agility(&config.vessel);
+            g
+        })
+        .collect();
+    let layer = SafetyLayer::new(region, config.safety)
+        .map_err(|e| SimError::Scenario(crate::mission::scenario::ScenarioError::Input(e)))?;
+    let mut monitor = Monitor::new(
+        n,
+        config.hull_radius,
+        config.safety.safety_distance,
+        config.safety.shore_distance,
+        1.0 / config.tick_hz,
+    );
+    let mut lines = vec![Line::HOLD; n];
+    let mut peaks = vec![Peaks::default(); n];
+    let mut governors: Vec<Governor> = states
+        .iter()
+        .map(|s| Governor::new(config.vessel, s.vel))
+        .collect();
+    let mut commands = vec![Command::default(); n];
+    let mut lloyd_positions: Vec<Point> = config
+        .scenario
+        .fleet
+        .vessels()
+        .iter()
+        .map(|v| v.position)
+        .collect();
+
+    let h = config.step;
+    let steps = (config.duration / h).round() as usize;
+    let per_tick = ((1.0 / config.tick_hz) / h).round().max(1.0) as usize;
+    let mut ticks = Vec::with_capacity(steps / per_tick + 1);
+    let mut snapshots = Vec::new();
+    let mut pending_snapshots: Vec<f64> = config.snapshots.clone();
+    let mut measures = Measures::default();
+    // Every vessel's tracking after 20 s.
+    let mut late = Peaks::default();
+
+    for k in 0..=steps {
+        let t = k as f64 * h;
+        // Every tick, and the final state even when the duration is not a
+        // whole number of ticks.
+        if k % per_tick == 0 || k == steps {
+            let diverged = states.iter().position(|s| {
+                !(s.x.is_finite() && s.y.is_finite()) || s.x.abs() > 1e6 || s.y.abs() > 1e6
+            });
+            if let Some(vessel) = diverged {
+                return Err(SimError::Diverged { vessel, t });
+            }
+            let fleet = fleet_at(config, states.iter().map(|s| Point { x: s.x, y: s.y }))
+                .ok_or(SimError::Diverged { vessel: 0, t })?;
+            let eval = evaluate(region, risk, &fleet, &options);
+            let lloyd_eval = if config.lloyd {
+                let lloyd_fleet = fleet_at(config, lloyd_positions.iter().copied())
+                    .ok_or(SimError::Diverged { vessel: 0, t })?;
+                Some(evaluate(region, risk, &lloyd_fleet, &options))
+            } else {
+                None
+            };
+
+            let safe = layer.commands(t, &states, &eval.cells, &mut guidance);
+            monitor.tick(&states, layer.shore(), safe.iter().map(|c| c.intervened));
+            let mut samples = Vec::with_capacity(n);
+            for i in 0..n {
+                let c = eval.cells[i].centroid;
+                commands[i] = safe[i].command;
+                lines[i] = Line {
+                    u_d: commands[i].u_d,
+                    r_d: commands[i].r_d,
+                    u_d_dot: commands[i].u_d_dot,
+                    r_d_dot: commands[i].r_d_dot,
+                };
+                samples.push(VesselSample {
+                    state: states[i],
+                    command: commands[i],
+                    centroid: c,
+                    goal: safe[i].goal,
+                    intervened: safe[i].intervened,
+                    tau_d: disturbances[i].value(t, states[i].psi),
+                    estimate: observers[i].estimate(),
+                    reference: governors[i].current(),
+                    peak_error: std::mem::take(&mut peaks[i]).error,
+                });
+            }
+            if let Some(pos) = pending_snapshots.iter().position(|&ts| ts <= t + 1e-9) {
+                pending_snapshots.remove(pos);
+                snapshots.push(Snapshot {
+                    t,
+                    cells: eval.cells.iter().map(|c| c.geometry.clone()).collect(),
+                });
+            }
+            ticks.push(Tick {
+                t,
+                h: eval.h,
+                lloyd_h: lloyd_eval.as_ref().map_or(f64::NAN, |e| e.h),
+                vessels: samples,
+                lloyd_positions: lloyd_positions.clone(),
+            });
+            if let Some(lloyd_eval) = lloyd_eval {
+                let centroids: Vec<Point> = lloyd_eval.cells.iter().map(|c| c.centroid).collect();
+                lloyd::step(
+                    &mut lloyd_positions,
+                    &centroids,
+                    config.lloyd_gain,
+                    per_tick as f64 * h,
+                );
+            }
+            progress(t / config.duration);
+        }
+        if k == steps {
+            break;
+        }
+        for i in 0..n {
+            let s = states[i];
+            observers[i].measure(s.vel, h);
+            let est = observers[i].estimate();
+            let truth = disturbances[i].value(t, s.psi);
+            if t >= 10.0 {
+                measures.observer_error_max_after_10s = measures
+                    .observer_error_max_after_10s
+                    .max((est - truth).amax());
+            }
+            if (est - truth).amax() > 0.05 {
+                measures.t1_observer = t;
+            }
+            // Between ticks the command is a line along its rates; the
+            // governor gives the controller what of it the hull can follow.
+            let since = (k % per_tick) as f64 * h;
+            let line = lines[i].at(since);
+            let reference = governors[i].step(&line, s.vel, est, h);
+            peaks[i].record(s.vel, &line, &reference);
+            if t >= 20.0 {
+                late.record(s.vel, &line, &reference);
+            }
+            let (tu, tr) = control(&config.vessel, &config.controller, s.vel, &reference, est);
+            let dist = &disturbances[i];
+            let (next, applied) = step(&config.vessel, &s, tu, tr, t, h, |t, st| {
+                dist.value(t, st.psi)
+            });
+            observers[i].actuate(Vec3::new(applied.0, 0.0, applied.1));
+            states[i] = next;
+        }
+        monitor.step(&states, layer.shore());
+    }
+    measures.u_error_max_after_20s = late.error.0.abs();
+    measures.r_error_max_after_20s = late.error.1.abs();
+    measures.u_lag_max_after_20s = late.lag.0.abs();
+    measures.r_lag_max_after_20s = late.lag.1.abs();
+    Ok(Run {
+        ticks,
+        snapshots,
+        measures,
+        safety: monitor.record,
+    })
+}

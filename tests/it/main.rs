@@ -1,0 +1,28 @@
+//! seacover's integration tests, one crate: the library is linked once, and
+//! every file here is a module of this one test binary (`cargo test --test
+//! it`; `cargo test --test it recording::` runs one file's tests).
+//!
+//! The tests start real processes (`seacover serve`, `agent`, `sim`,
+//! ArduPilot's SITL, chromium), real sockets and real clients; what several
+//! files share is in [`common`]: the binary on port 0, an in-process
+//! coordinator, vessel links, and positions placed by geographiclib.
+
+mod common;
+
+mod api_docs;
+mod architecture;
+mod ardupilot_sitl;
+mod cli;
+mod dashboard;
+mod engine;
+mod geo;
+mod geodesy;
+mod load;
+mod network;
+mod persistence;
+mod properties;
+mod recording;
+mod safety;
+mod shutdown;
+mod sim;
+mod tracking;
