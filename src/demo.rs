@@ -1,6 +1,6 @@
 //! `seacover demo`: the coordinator and the paper's eight simulated vessels
 //! in one process, on real loopback sockets — what `main` runs and what the
-//! networked tracking test (`tests/tracking.rs`) runs, so the two cannot
+//! networked tracking test (`tests/it/tracking.rs`) runs, so the two cannot
 //! drift apart.
 //!
 //! Invariant: the vessels are ordinary agents ([`run_fleet`]) on WebSocket

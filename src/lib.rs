@@ -1,20 +1,28 @@
 //! seacover: coverage control for fleets of unmanned surface vessels.
 //!
-//! Code map:
-//! - [`geometry`] and [`coverage`]: the pure core (no I/O, deterministic,
-//!   cannot fail on validated input): region, power partition, quadrature,
-//!   mass / centroid / H(P);
+//! Code map, in layers: each uses only the layers above it in this list
+//! (`tests/it/architecture.rs` checks it).
+//! - core, the [`seacover_engine`] crate, re-exported here as [`geometry`],
+//!   [`coverage`] and [`control`]: region, power partition, quadrature,
+//!   mass / centroid / H(P), the vessel model, observer, controller,
+//!   guidance and safety layer; no async, no I/O, no serde, deterministic,
+//!   cannot fail on validated input;
 //! - [`protocol`]: the serde types of everything that crosses the wire or the
 //!   command line, and nothing else;
-//! - [`scenario`]: the shell that turns a scenario document into validated core
-//!   types and an evaluation back into its document;
-//! - [`georef`]: WGS84 documents (GeoJSON, lat/lon) in and GeoJSON out,
-//!   through the mission's local plane;
-//! - [`demo`]: `seacover demo`, the coordinator and eight simulated vessels
-//!   on loopback in one process;
-//! - [`load`]: `seacover bench load`, a load benchmark of a running coordinator;
+//! - [`mission`]: the mission model and its changes, documents ⇄ core types
+//!   (scenarios, WGS84 documents), the mission clock and the built-in
+//!   scenarios; no I/O, its own errors;
 //! - [`recorder`]: every run recorded as MCAP on a thread of its own, and
-//!   read back (replay, `seacover record`).
+//!   read back (replay, `seacover record`); nobody waits on its disk;
+//! - the shell: [`sim`] (the closed loop in one process), [`agent`]
+//!   (simulated vessels and the MAVLink bridge on coordinator links),
+//!   [`server`] (the coordinator: one tick task owns the state) and [`load`]
+//!   (`seacover bench load`);
+//! - [`demo`]: `seacover demo`, the coordinator and eight simulated vessels
+//!   on loopback in one process.
+//!
+//! The binary (`src/bin/seacover/`) is one file per subcommand over this
+//! library.
 
 pub mod agent;
 pub mod demo;

@@ -5,8 +5,8 @@
 //! Both come from the serde types in [`crate::protocol`] (`utoipa::ToSchema`,
 //! `schemars::JsonSchema`) and the `#[utoipa::path]` annotations of the
 //! handlers in [`super::api`], so they cannot drift from the code unnoticed:
-//! `tests/api_docs.rs` regenerates them and fails when the committed files
-//! differ (`SEACOVER_BLESS=1 cargo test --test api_docs` rewrites them).
+//! `tests/it/api_docs.rs` regenerates them and fails when the committed files
+//! differ (`SEACOVER_BLESS=1 cargo test --test it api_docs::` rewrites them).
 //! Endpoints whose handlers live elsewhere (`/metrics`, the WebSockets) are
 //! described here by documentation-only functions.
 

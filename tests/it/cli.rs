@@ -278,7 +278,7 @@ fn a_geo_referenced_scenario_evaluates_as_its_local_twin() {
     let local = evaluate(&harbour());
     let geo = evaluate(&geo_harbour());
     // The two placements differ by the plane's distortion over 250 m,
-    // s³/(6R²) < 0.1 µm (tests/geodesy.rs), so the figures agree to that;
+    // s³/(6R²) < 0.1 µm (tests/it/geodesy.rs), so the figures agree to that;
     // areas to 1e-8, since the clipping itself moves cell vertices by
     // about 1e-7 m either way.
     let h = |v: &Value| v["H"].as_f64().unwrap();

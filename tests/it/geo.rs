@@ -295,7 +295,7 @@ async fn geojson_regions_and_lat_lon_objects_are_placed_in_the_plane() {
     // The same harbour as a bare Polygon, as a Feature (geojson.io) and as
     // a FeatureCollection of a MultiPolygon (QGIS's export): each lands on
     // the local harbour, islands and all, within the plane's distortion
-    // (33 nm at 250 m; tests/geodesy.rs).
+    // (33 nm at 250 m; tests/it/geodesy.rs).
     let feature =
         json!({"type": "Feature", "properties": {"name": "harbour"}, "geometry": geometry});
     let qgis = json!({"type": "FeatureCollection", "name": "harbour", "features": [{

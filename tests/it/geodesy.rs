@@ -2,7 +2,7 @@
 //! computation: geographiclib-rs, a port of Karney's algorithms for the
 //! WGS84 ellipsoid (accurate to about 15 nm), which shares no code with ours.
 //!
-//! `cargo test --test geodesy -- --nocapture` prints the table of the
+//! `cargo test --test it geodesy:: -- --nocapture` prints the table of the
 //! plane's distortion that the README quotes.
 //!
 //! What the plane should do, derived before measuring. A geodesic leaves

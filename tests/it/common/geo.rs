@@ -4,7 +4,7 @@
 //!
 //! Placing the local point (x, y) at geodesic distance s = hypot(x, y) in
 //! azimuth atan2(x, y) from the origin differs from the plane's own
-//! placement by s³/(6R²) in distance (tests/geodesy.rs: 33 nm at 200 m,
+//! placement by s³/(6R²) in distance (tests/it/geodesy.rs: 33 nm at 200 m,
 //! 4 µm at 1 km), far below what any of these tests compares.
 
 use geographiclib_rs::{DirectGeodesic, Geodesic, InverseGeodesic};

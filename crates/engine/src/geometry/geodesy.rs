@@ -10,7 +10,7 @@
 //!   non-finite origin, |lat| ≥ 90° and |lon| > 180°;
 //! - [`LocalFrame::to_local`] and [`LocalFrame::to_geodetic`] are inverse to
 //!   better than 1 mm within [`LocalFrame::RANGE`] of the origin (tested to
-//!   1 µm, from any origin with |lat| < 89.99°, in `tests/geodesy.rs`);
+//!   1 µm, from any origin with |lat| < 89.99°, in `tests/it/geodesy.rs`);
 //! - longitudes come back wrapped to (−180°, 180°] and latitudes within
 //!   [−90°, 90°], also for plane points beyond a pole.
 //!
@@ -33,7 +33,7 @@
 //! azimuth): short by a part s²/(6R_α²), 4e-9 at 1 km, 4e-7 at 10 km, 1.0e-5
 //! (0.51–0.52 m) at 50 km. Its plane bearing is the normal section's azimuth,
 //! off the geodesic's by at most e'² s² / (12 N²), 3.5e-8 rad at 50 km.
-//! `tests/geodesy.rs` derives both and holds the plane to them against
+//! `tests/it/geodesy.rs` derives both and holds the plane to them against
 //! geographiclib's geodesics (an independent implementation of Karney's
 //! algorithms); the README quotes the measured table.
 
