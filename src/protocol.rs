@@ -21,8 +21,8 @@ pub type XY = [f64; 2];
 /// A scenario document (`examples/*.json`), as `seacover evaluate` and
 /// `POST /api/v1/coverage/evaluate` read it. With an origin, its region may
 /// be GeoJSON and its risk objects and vessels may be placed by `lat` and
-/// `lon` instead of `x` and `y`; the mission layer (`mission::scenario`)
-/// converts them to the local plane.
+/// `lon` instead of `x` and `y`; [`crate::scenario`] converts them to the
+/// local plane.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
 pub struct ScenarioDocument {
     /// A label; ignored by the engine.

@@ -5,22 +5,21 @@
 //! rejects).
 //!
 //! After changing the protocol types or the handlers' annotations, refresh
-//! the documents with `SEACOVER_BLESS=1 cargo test --test api_docs` and
+//! the documents with `SEACOVER_BLESS=1 cargo test --test it api_docs::` and
 //! commit them.
 
 use std::path::PathBuf;
 use std::time::Duration;
 
+use crate::common::inprocess::Server;
 use futures_util::{SinkExt, StreamExt};
 use seacover::protocol::{CommandDocument, CoordinatorMessage, PoseDocument, VesselMessage};
+use seacover::server::ServeConfig;
 use seacover::server::openapi;
-use seacover::server::{ServeConfig, serve};
 use serde_json::{Value, json};
-use tokio::net::TcpListener;
 use tokio_tungstenite::tungstenite::Message;
-use tokio_util::sync::CancellationToken;
 
-const REFRESH: &str = "SEACOVER_BLESS=1 cargo test --test api_docs";
+const REFRESH: &str = "SEACOVER_BLESS=1 cargo test --test it api_docs::";
 
 fn blessing() -> bool {
     std::env::var_os("SEACOVER_BLESS").is_some_and(|v| v == "1")
@@ -406,45 +405,16 @@ fn the_openapi_request_schemas_agree_with_serde() {
     }
 }
 
-struct Server {
-    addr: std::net::SocketAddr,
-    shutdown: CancellationToken,
-    task: tokio::task::JoinHandle<()>,
-}
-
 async fn start() -> Server {
-    let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
-    let addr = listener.local_addr().unwrap();
-    let shutdown = CancellationToken::new();
-    let config = ServeConfig {
+    Server::start(ServeConfig {
         time_warp: 10.0,
         ..Default::default()
-    };
-    let token = shutdown.clone();
-    let task = tokio::spawn(async move { serve(listener, config, token).await.unwrap() });
-    Server {
-        addr,
-        shutdown,
-        task,
-    }
-}
-
-impl Server {
-    fn url(&self, path: &str) -> String {
-        format!("http://{}{path}", self.addr)
-    }
-
-    async fn stop(self) {
-        self.shutdown.cancel();
-        tokio::time::timeout(Duration::from_secs(5), self.task)
-            .await
-            .unwrap()
-            .unwrap();
-    }
+    })
+    .await
 }
 
 async fn get(server: &Server, path: &str) -> (u16, Value) {
-    let response = reqwest::get(server.url(path)).await.unwrap();
+    let response = reqwest::get(server.http(path)).await.unwrap();
     let status = response.status().as_u16();
     (status, response.json().await.unwrap())
 }
@@ -452,7 +422,7 @@ async fn get(server: &Server, path: &str) -> (u16, Value) {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_server_serves_the_committed_document() {
     let server = start().await;
-    let response = reqwest::get(server.url("/api/v1/openapi.json"))
+    let response = reqwest::get(server.http("/api/v1/openapi.json"))
         .await
         .unwrap();
     assert_eq!(response.status(), 200);
@@ -483,7 +453,7 @@ async fn the_real_server_speaks_as_documented() {
     let doc = openapi_document();
     let server = start().await;
 
-    let url = format!("ws://{}/api/v1/vessels/link", server.addr);
+    let url = server.ws();
     let (socket, _) = tokio_tungstenite::connect_async(url.as_str())
         .await
         .unwrap();
@@ -570,7 +540,7 @@ async fn the_real_server_speaks_as_documented() {
     assert_valid(&component(&doc, "ScenarioDocument"), &scenario);
     let client = reqwest::Client::new();
     let response = client
-        .post(server.url("/api/v1/coverage/evaluate"))
+        .post(server.http("/api/v1/coverage/evaluate"))
         .json(&scenario)
         .send()
         .await
@@ -579,7 +549,7 @@ async fn the_real_server_speaks_as_documented() {
     let evaluation: Value = response.json().await.unwrap();
     assert_valid(&component(&doc, "EvaluationDocument"), &evaluation);
     let response = client
-        .post(server.url("/api/v1/coverage/evaluate"))
+        .post(server.http("/api/v1/coverage/evaluate"))
         .body("{\"vessels\": 3}")
         .send()
         .await
@@ -592,7 +562,7 @@ async fn the_real_server_speaks_as_documented() {
     let object = json!({"x": 10, "y": 20, "alpha": 3, "sigma": 5});
     assert_valid(&component(&doc, "RiskObjectDocument"), &object);
     let response = client
-        .post(server.url("/api/v1/risk-objects"))
+        .post(server.http("/api/v1/risk-objects"))
         .json(&object)
         .send()
         .await
@@ -606,7 +576,7 @@ async fn the_real_server_speaks_as_documented() {
     let base = json!({"value": 0.2});
     assert_valid(&component(&doc, "RiskBaseDocument"), &base);
     let response = client
-        .put(server.url("/api/v1/mission/risk/base"))
+        .put(server.http("/api/v1/mission/risk/base"))
         .json(&base)
         .send()
         .await
@@ -621,7 +591,7 @@ async fn the_real_server_speaks_as_documented() {
     let origin = json!({"lat": -35.363261, "lon": 149.16523});
     assert_valid(&component(&doc, "OriginDocument"), &origin);
     let response = client
-        .put(server.url("/api/v1/mission/origin"))
+        .put(server.http("/api/v1/mission/origin"))
         .json(&origin)
         .send()
         .await
@@ -641,7 +611,7 @@ async fn the_real_server_speaks_as_documented() {
                         "geometry": {"type": "Polygon", "coordinates": [ring]}});
     assert_valid(&component(&doc, "RegionInput"), &region);
     let response = client
-        .put(server.url("/api/v1/mission/region"))
+        .put(server.http("/api/v1/mission/region"))
         .json(&region)
         .send()
         .await
@@ -652,7 +622,7 @@ async fn the_real_server_speaks_as_documented() {
     let object = json!({"lat": -35.3628, "lon": 149.1658, "alpha": 3, "sigma": 5});
     assert_valid(&component(&doc, "RiskObjectInput"), &object);
     let response = client
-        .post(server.url("/api/v1/risk-objects"))
+        .post(server.http("/api/v1/risk-objects"))
         .json(&object)
         .send()
         .await
@@ -660,7 +630,7 @@ async fn the_real_server_speaks_as_documented() {
     assert_eq!(response.status(), 201);
     let stored: Value = response.json().await.unwrap();
     assert_valid(&component(&doc, "RiskObjectDocument"), &stored);
-    let response = reqwest::get(server.url("/api/v1/coverage.geojson"))
+    let response = reqwest::get(server.http("/api/v1/coverage.geojson"))
         .await
         .unwrap();
     assert_eq!(response.status(), 200);

@@ -11,12 +11,13 @@ use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
+use crate::common::inprocess::Server;
 use fantoccini::actions::{InputSource, MOUSE_BUTTON_LEFT, MouseActions, PointerAction};
 use fantoccini::{Client, ClientBuilder, Locator};
 use seacover::agent::{AgentConfig, paper_vessels, run_fleet};
 use seacover::control::model::VesselParams;
 use seacover::protocol::RiskObjectDocument;
-use seacover::server::{ServeConfig, serve};
+use seacover::server::ServeConfig;
 use serde_json::{Value, json};
 use tokio::net::TcpListener;
 use tokio_util::sync::CancellationToken;
@@ -256,18 +257,17 @@ async fn the_dashboard_shows_the_fleet_and_edits_risk() {
     };
 
     // The real coordinator with the paper's eight vessels on real links.
-    let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
-    let addr = listener.local_addr().unwrap();
-    let stop = CancellationToken::new();
-    let config = ServeConfig {
+    let server = Server::start(ServeConfig {
         time_warp: 5.0,
         token: Some(TOKEN.into()),
         ..ServeConfig::default()
-    };
-    let server = tokio::spawn(serve(listener, config, stop.clone()));
+    })
+    .await;
+    let addr = server.addr;
+    let stop = server.shutdown();
     let fleet = tokio::spawn(run_fleet(
         AgentConfig {
-            url: format!("ws://{addr}/api/v1/vessels/link"),
+            url: server.ws(),
             time_warp: 5.0,
             pose_hz: 20.0,
             seed: 1,
@@ -507,7 +507,7 @@ async fn the_dashboard_shows_the_fleet_and_edits_risk() {
     client.close().await.unwrap();
     stop.cancel();
     fleet.await.unwrap();
-    server.await.unwrap().unwrap();
+    server.stop_unbounded().await;
 }
 
 /// A thousand vessels at 10 Hz (the load benchmark's links, in this process):
@@ -519,9 +519,6 @@ async fn the_dashboard_keeps_up_with_a_thousand_vessels() {
     let Some((driver_path, chrome)) = browser_or_skip() else {
         return;
     };
-    let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
-    let addr = listener.local_addr().unwrap();
-    let stop = CancellationToken::new();
     // The mission made for a thousand vessels (fleet-1000's 1 km square, as
     // the load benchmark uses): in the paper's 100 m square they would sit
     // 3 m apart, inside each other's safety distance, and the collision
@@ -534,13 +531,11 @@ async fn the_dashboard_keeps_up_with_a_thousand_vessels() {
         mission,
         ..ServeConfig::default()
     };
-    let server = tokio::spawn(serve(listener, config, stop.clone()));
-    let mut load = seacover::load::LoadConfig::new(
-        format!("http://{addr}"),
-        1000,
-        10.0,
-        Duration::from_secs(20),
-    );
+    let server = Server::start(config).await;
+    let addr = server.addr;
+    let stop = server.shutdown();
+    let mut load =
+        seacover::load::LoadConfig::new(server.base(), 1000, 10.0, Duration::from_secs(20));
     load.warmup = Duration::from_secs(1);
     let fleet = tokio::spawn(seacover::load::run(load, stop.clone()));
 
@@ -600,7 +595,7 @@ async fn the_dashboard_keeps_up_with_a_thousand_vessels() {
     client.close().await.unwrap();
     stop.cancel();
     let _ = fleet.await.unwrap();
-    server.await.unwrap().unwrap();
+    server.stop_unbounded().await;
 }
 
 /// With a WGS84 origin the map becomes a chart: the pointer's latitude and
@@ -616,10 +611,8 @@ async fn the_dashboard_places_the_map_on_the_globe() {
     };
     // ArduPilot SITL's home, Canberra.
     let origin = (-35.363261, 149.16523);
-    let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
-    let addr = listener.local_addr().unwrap();
-    let stop = CancellationToken::new();
-    let server = tokio::spawn(serve(listener, ServeConfig::default(), stop.clone()));
+    let server = Server::start(ServeConfig::default()).await;
+    let addr = server.addr;
     let (_driver, port) = start_driver(&driver_path).await;
     let client = open_browser(port, &chrome).await;
     client.goto(&format!("http://{addr}/")).await.unwrap();
@@ -799,8 +792,7 @@ async fn the_dashboard_places_the_map_on_the_globe() {
         .unwrap();
     assert_eq!(errors, json!([]), "the page reported errors");
     client.close().await.unwrap();
-    stop.cancel();
-    server.await.unwrap().unwrap();
+    server.stop_unbounded().await;
 }
 
 /// `seacover replay` in the browser: the replay bar appears, and a seek

@@ -1,35 +1,55 @@
-//! `seacover bench load` against the real coordinator in this process, on
-//! loopback at time warp 1: behaviour of the measurement, not speed (the
-//! README has the measured figures).
+//! `seacover bench load` against the real coordinator on loopback at time
+//! warp 1: behaviour of the measurement, not speed (the README has the
+//! measured figures). The measured coordinator runs as its own process, as
+//! the benchmark is meant to be used: its `/metrics` (the published tick
+//! clock, the command-delay histogram) are per process, and other tests of
+//! this crate run coordinators in this one.
 
 use std::time::Duration;
 
+use crate::common::inprocess::Server;
 use seacover::load::{LoadConfig, run};
-use seacover::server::{ServeConfig, serve};
+use seacover::server::ServeConfig;
 use tokio::net::TcpListener;
 use tokio_util::sync::CancellationToken;
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn twenty_links_are_held_and_commanded_every_tick() {
-    let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
-    let addr = listener.local_addr().unwrap();
-    let shutdown = CancellationToken::new();
-    let config = ServeConfig {
-        time_warp: 1.0,
-        ..Default::default()
-    };
-    let server = tokio::spawn(serve(listener, config, shutdown.clone()));
+    let data = tempfile::tempdir().unwrap();
+    let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_seacover"));
+    command
+        .args([
+            "serve",
+            "--bind",
+            "127.0.0.1:0",
+            "--record",
+            "off",
+            "--data-dir",
+        ])
+        .arg(data.path())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null());
+    let (child, addr) = crate::common::server::start(command);
+    let mut coordinator = crate::common::process::KillOnDrop(child);
 
     let mut load = LoadConfig::new(format!("http://{addr}"), 20, 20.0, Duration::from_secs(2));
     load.warmup = Duration::from_millis(500);
     let report = run(load, CancellationToken::new()).await.unwrap();
 
-    shutdown.cancel();
-    tokio::time::timeout(Duration::from_secs(5), server)
-        .await
-        .unwrap()
-        .unwrap()
-        .unwrap();
+    // It stops cleanly on SIGTERM within 5 s.
+    crate::common::process::signal(coordinator.0.id(), "-TERM");
+    let deadline = std::time::Instant::now() + Duration::from_secs(5);
+    let status = loop {
+        if let Some(status) = coordinator.0.try_wait().unwrap() {
+            break status;
+        }
+        assert!(
+            std::time::Instant::now() < deadline,
+            "the coordinator stops within 5 s"
+        );
+        tokio::time::sleep(Duration::from_millis(20)).await;
+    };
+    assert!(status.success(), "{status}");
 
     let text = report.to_string();
     assert_eq!(report.links.held, 20, "{text}");
@@ -126,18 +146,14 @@ async fn an_unreachable_coordinator_is_an_error() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_wrong_token_fails_every_link() {
-    let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
-    let addr = listener.local_addr().unwrap();
-    let shutdown = CancellationToken::new();
-    let config = ServeConfig {
+    let server = Server::start(ServeConfig {
         token: Some("right".into()),
         ..Default::default()
-    };
-    let server = tokio::spawn(serve(listener, config, shutdown.clone()));
-    let mut load = LoadConfig::new(format!("http://{addr}"), 3, 20.0, Duration::from_secs(1));
+    })
+    .await;
+    let mut load = LoadConfig::new(server.base(), 3, 20.0, Duration::from_secs(1));
     load.token = Some("wrong".into());
     let err = run(load, CancellationToken::new()).await.unwrap_err();
     assert!(err.to_string().contains("no vessel link"), "{err}");
-    shutdown.cancel();
-    let _ = tokio::time::timeout(Duration::from_secs(5), server).await;
+    server.stop_ignoring_result().await;
 }

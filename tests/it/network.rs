@@ -4,6 +4,7 @@
 
 use std::time::{Duration, Instant};
 
+use crate::common::inprocess::Server;
 use crate::common::link::{hello, next_json};
 use futures_util::{SinkExt, StreamExt};
 use seacover::agent::{AgentConfig, paper_vessels, run_fleet};
@@ -17,52 +18,17 @@ use tokio_util::sync::CancellationToken;
 
 const WARP: f64 = 20.0;
 
-struct Server {
-    addr: std::net::SocketAddr,
-    shutdown: CancellationToken,
-    task: tokio::task::JoinHandle<()>,
-}
-
 async fn start() -> Server {
     start_with(None).await
 }
 
 async fn start_with(token: Option<&str>) -> Server {
-    start_config(ServeConfig {
+    Server::start(ServeConfig {
         time_warp: WARP,
         token: token.map(str::to_string),
         ..ServeConfig::default()
     })
     .await
-}
-
-async fn start_config(config: ServeConfig) -> Server {
-    let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
-    let addr = listener.local_addr().unwrap();
-    let shutdown = CancellationToken::new();
-    let token = shutdown.clone();
-    let task = tokio::spawn(async move { serve(listener, config, token).await.unwrap() });
-    Server {
-        addr,
-        shutdown,
-        task,
-    }
-}
-
-impl Server {
-    fn http(&self, path: &str) -> String {
-        format!("http://{}{path}", self.addr)
-    }
-    fn ws(&self) -> String {
-        format!("ws://{}/api/v1/vessels/link", self.addr)
-    }
-    async fn stop(self) {
-        self.shutdown.cancel();
-        tokio::time::timeout(Duration::from_secs(5), self.task)
-            .await
-            .unwrap()
-            .unwrap();
-    }
 }
 
 /// `GET path` on the server, parsed.
@@ -512,7 +478,7 @@ async fn a_token_guards_writes_and_links_but_not_reads() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn writes_are_rate_limited_and_bodies_bounded() {
-    let server = start_config(ServeConfig {
+    let server = Server::start(ServeConfig {
         write_rate: 2,
         write_burst: 5,
         ..ServeConfig::default()

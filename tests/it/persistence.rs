@@ -12,15 +12,15 @@ use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::Duration;
 
+use crate::common::inprocess::Server;
 use crate::common::process::signal;
 use crate::common::server::{eventually, get_json, mission, serve_command, spawn_server, start};
 use rand::{RngExt, SeedableRng};
 use seacover::agent::{AgentConfig, paper_vessels, run_fleet};
 use seacover::control::model::VesselParams;
 use seacover::protocol::{MissionDocument, RiskObjectDocument, VesselStatusDocument};
-use seacover::server::{ServeConfig, serve};
+use seacover::server::ServeConfig;
 use serde_json::json;
-use tokio::net::TcpListener;
 use tokio_util::sync::CancellationToken;
 
 /// The risk part of the mission as the model sees it: base and objects by id
@@ -183,37 +183,27 @@ async fn sigkill_during_writes_loses_nothing_acknowledged() {
     let _ = child.wait();
 }
 
-async fn start_in_process(
-    addr: &str,
-    data: &Path,
-) -> (
-    std::net::SocketAddr,
-    CancellationToken,
-    tokio::task::JoinHandle<()>,
-) {
-    let listener = TcpListener::bind(addr).await.unwrap();
-    let addr = listener.local_addr().unwrap();
-    let stop = CancellationToken::new();
+/// The coordinator in this process on `bind`, storing the mission in `data`.
+async fn start_in_process(bind: &str, data: &Path) -> Server {
     let config = ServeConfig {
         time_warp: 10.0,
         data_dir: Some(data.to_path_buf()),
         ..ServeConfig::default()
     };
-    let token = stop.clone();
-    let task = tokio::spawn(async move { serve(listener, config, token).await.unwrap() });
-    (addr, stop, task)
+    Server::start_on(bind, config).await
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn vessels_reconnect_after_a_restart_and_find_the_mission_intact() {
     let dir = tempfile::tempdir().unwrap();
     let http = reqwest::Client::new();
-    let (addr, stop, task) = start_in_process("127.0.0.1:0", dir.path()).await;
-    let base = format!("http://{addr}");
+    let server = start_in_process("127.0.0.1:0", dir.path()).await;
+    let addr = server.addr;
+    let base = server.base();
 
     let fleet_stop = CancellationToken::new();
     let agents = AgentConfig {
-        url: format!("ws://{addr}/api/v1/vessels/link"),
+        url: server.ws(),
         time_warp: 10.0,
         pose_hz: 20.0,
         seed: 3,
@@ -256,14 +246,10 @@ async fn vessels_reconnect_after_a_restart_and_find_the_mission_intact() {
         .unwrap();
     assert_eq!(r.status(), 200);
     let before: MissionDocument = get_json(&http, &format!("{base}/api/v1/mission")).await;
-    stop.cancel();
-    tokio::time::timeout(Duration::from_secs(5), task)
-        .await
-        .unwrap()
-        .unwrap();
+    server.stop().await;
 
-    let (addr2, stop, task) = start_in_process(&addr.to_string(), dir.path()).await;
-    assert_eq!(addr2, addr);
+    let server = start_in_process(&addr.to_string(), dir.path()).await;
+    assert_eq!(server.addr, addr);
     let after: MissionDocument = get_json(&http, &format!("{base}/api/v1/mission")).await;
     assert_eq!(after, before, "the mission changed across the restart");
     let objects: Vec<RiskObjectDocument> =
@@ -289,11 +275,7 @@ async fn vessels_reconnect_after_a_restart_and_find_the_mission_intact() {
 
     fleet_stop.cancel();
     fleet.await.unwrap();
-    stop.cancel();
-    tokio::time::timeout(Duration::from_secs(5), task)
-        .await
-        .unwrap()
-        .unwrap();
+    server.stop().await;
 }
 
 #[test]

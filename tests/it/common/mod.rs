@@ -6,6 +6,7 @@
 #![allow(dead_code)]
 
 pub mod geo;
+pub mod inprocess;
 pub mod link;
 pub mod process;
 pub mod server;
