@@ -2,7 +2,7 @@
 //! single-threaded, on the scenario documents kept in `examples/`.
 //!
 //! `cargo bench --bench evaluate`; `scripts/bench-baseline` runs this and the
-//! NumPy baseline in one go and prints the README's table.
+//! NumPy baseline in one go and prints the table of docs/performance.md.
 
 use std::hint::black_box;
 use std::time::Duration;

@@ -21,9 +21,9 @@ pub type XY = [f64; 2];
 /// A scenario document (`examples/*.json`), as `seacover evaluate` and
 /// `POST /api/v1/coverage/evaluate` read it. With an origin, its region may
 /// be GeoJSON and its risk objects and vessels may be placed by `lat` and
-/// `lon` instead of `x` and `y`; [`crate::scenario`] converts them to the
-/// local plane.
+/// `lon` instead of `x` and `y`, which are placed in the local plane.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
+#[serde(deny_unknown_fields)]
 pub struct ScenarioDocument {
     /// A label; ignored by the engine.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -44,6 +44,7 @@ pub struct ScenarioDocument {
 /// A geographic origin, WGS84 degrees: the mission's local plane is the
 /// East-North-Up plane tangent to the ellipsoid there (x east, y north, m).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
+#[serde(deny_unknown_fields)]
 pub struct OriginDocument {
     /// Latitude [deg], |lat| < 90.
     pub lat: f64,
@@ -53,6 +54,9 @@ pub struct OriginDocument {
 
 /// The task region: a simple polygon with optional holes.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
+// No `deny_unknown_fields`: a region object with both `polygon` and a
+// GeoJSON `type` must match both forms of `RegionInput`'s schema, so that
+// its `oneOf` refuses it as serde does (`choose::geojson`).
 pub struct RegionDocument {
     /// Outer ring `[[x, y], …]` in metres, without the closing vertex.
     #[schema(schema_with = schema::region_polygon)]
@@ -65,6 +69,7 @@ pub struct RegionDocument {
 
 /// Risk density: base φ0 plus Gaussian objects.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
+#[serde(deny_unknown_fields)]
 pub struct RiskDocument {
     /// φ0 ≥ 0, the density everywhere in the region.
     pub base: f64,
@@ -74,6 +79,7 @@ pub struct RiskDocument {
 
 /// One Gaussian risk object: α exp(−‖q − (x, y)‖² / 2σ²).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
+#[serde(deny_unknown_fields)]
 pub struct RiskObjectDocument {
     /// `[A-Za-z0-9_.-]{1,64}`; the server assigns one when it is omitted.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -87,6 +93,7 @@ pub struct RiskObjectDocument {
 
 /// One vessel of a scenario.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
+#[serde(deny_unknown_fields)]
 pub struct VesselDocument {
     /// `[A-Za-z0-9_.-]{1,64}`, unique in the document.
     pub id: String,
@@ -134,6 +141,7 @@ pub enum RiskObjectInput {
 
 /// A risk object placed in WGS84 degrees.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
+#[serde(deny_unknown_fields)]
 pub struct GeoRiskObjectDocument {
     /// `[A-Za-z0-9_.-]{1,64}`; the server assigns one when it is omitted.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -149,6 +157,7 @@ pub struct GeoRiskObjectDocument {
 
 /// A scenario's risk density, its objects placed either way.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
+#[serde(deny_unknown_fields)]
 pub struct RiskInput {
     /// φ0 ≥ 0, the density everywhere in the region.
     pub base: f64,
@@ -167,6 +176,7 @@ pub enum VesselInput {
 
 /// A scenario's vessel placed in WGS84 degrees.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
+#[serde(deny_unknown_fields)]
 pub struct GeoVesselDocument {
     /// `[A-Za-z0-9_.-]{1,64}`, unique in the document.
     pub id: String,
@@ -740,7 +750,32 @@ mod schema {
 
 /// `PUT /api/v1/mission/risk/base` body: the new base density φ0.
 #[derive(Serialize, Deserialize, ToSchema)]
+#[serde(deny_unknown_fields)]
 pub struct RiskBaseDocument {
     /// φ0 ≥ 0.
     pub value: f64,
+}
+
+/// `GET /api/v1/coverage/history`: H(P) from the mission's first tick to
+/// (about) the newest, at most 1000 samples however long the mission.
+/// Every tick is kept at first; when the history is full every other
+/// sample is dropped and `stride` doubles, so the samples stay about
+/// `stride` ticks apart and always reach back to the start.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
+pub struct CoverageHistoryDocument {
+    /// Ticks between two samples kept from now on (1, 2, 4, …).
+    pub stride: u64,
+    /// Oldest first, `stride` ticks apart (more where ticks were skipped);
+    /// the newest tick is about `stride` ticks after the last one at most.
+    pub samples: Vec<CoverageSampleDocument>,
+}
+
+/// H(P) at one tick.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
+pub struct CoverageSampleDocument {
+    pub tick: u64,
+    /// Mission time [s].
+    pub time: f64,
+    #[serde(rename = "H")]
+    pub h: f64,
 }

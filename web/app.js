@@ -1,14 +1,17 @@
 // The dashboard: the stream's snapshots drive the map, the charts and the
 // vessel table; the operator's edits go through the REST API (api.js), and
-// the next snapshot shows their effect.
+// the next snapshot shows their effect. The server marks the page with what
+// it is (`<html data-mode="live|replay">`, src/server/web.rs): a replay's
+// page offers no editing and shows the replay bar (replay.js).
 
-import { write, askToken, token, showError } from "./api.js";
+import { write, read, askToken, token, showError } from "./api.js";
 import { MapView, ramp } from "./map.js";
 import { Series, drawChart } from "./charts.js";
 import { GeoOverlay } from "./geo-overlay.js";
 import { startReplayBar } from "./replay.js";
 
 const $ = (id) => document.getElementById(id);
+const REPLAY = document.documentElement.dataset.mode === "replay";
 const canvas = $("map");
 const view = new MapView(canvas);
 const geo = new GeoOverlay(canvas, view);
@@ -17,7 +20,10 @@ const state = {
   snapshot: null,
   selectedObject: null,
   selectedVessel: null,
-  h: new Series(1200),
+  // H(P) from the mission's start: the coordinator's history, then the
+  // stream; thinned (every other point) rather than cut when full.
+  h: new Series(2000, { thin: true }),
+  historyLoads: 0,
   vesselSeries: { u: new Series(), r: new Series(), obs: new Series() },
   tableDrawn: 0,
   snapshots: 0,
@@ -25,10 +31,57 @@ const state = {
 // For people poking from the console, and for the browser tests.
 window.seacover = { view, state, geo, replay: null };
 // A replay's bar; a seek clears the trails, which would otherwise join the
-// old moment to the new one.
-startReplayBar(() => view.trails.clear()).then((bar) => {
-  window.seacover.replay = bar;
-});
+// old moment to the new one, and starts the H chart again from the
+// recording's history up to the new moment.
+if (REPLAY) {
+  startReplayBar({
+    seeking: () => view.trails.clear(),
+    sought: () => {
+      state.h.clear();
+      loadHistory();
+    },
+  }).then((bar) => {
+    window.seacover.replay = bar;
+  });
+}
+
+// The map's overlays (buttons and north arrow at the top; hint, legend and
+// scale bar at the bottom): "fit" keeps the region out from under them.
+view.insets = () => {
+  const c = canvas.getBoundingClientRect();
+  let top = 0;
+  let bottom = 0;
+  for (const id of ["map-tools", "north-arrow"]) {
+    const r = $(id).getBoundingClientRect();
+    if (r.width > 0 && r.height > 0) top = Math.max(top, r.bottom - c.top);
+  }
+  for (const id of ["map-hint", "legend", "scale-bar"]) {
+    const r = $(id).getBoundingClientRect();
+    if (r.width > 0 && r.height > 0) bottom = Math.max(bottom, c.bottom - r.top);
+  }
+  return { top: Math.round(top), bottom: Math.round(bottom) };
+};
+
+// ---- H(P) history -------------------------------------------------------------
+
+/**
+ * Puts the coverage history (GET /api/v1/coverage/history: the mission's,
+ * or the recording's up to the replay's time) before what the stream has
+ * brought, so that a page opened mid-mission charts H from the start.
+ */
+async function loadHistory() {
+  const load = ++state.historyLoads;
+  let history;
+  try {
+    history = await read("/api/v1/coverage/history");
+  } catch (e) {
+    console.warn("seacover: no coverage history", e);
+    return;
+  }
+  if (load !== state.historyLoads) return; // a newer load is on its way
+  state.h.prepend(history.samples.map((s) => [s.time, s.H]));
+  drawCharts();
+}
 
 // ---- stream -----------------------------------------------------------------
 
@@ -44,7 +97,8 @@ function connect(delay = 500) {
   let opened = false;
   ws.onopen = () => {
     opened = true;
-    setStatus("live", "live");
+    if (REPLAY) setStatus("replay", "replay");
+    else setStatus("live", "live");
   };
   ws.onmessage = (event) => {
     try {
@@ -74,11 +128,23 @@ function onSnapshot(snap) {
   state.snapshots += 1;
   document.body.dataset.tick = String(snap.tick);
   view.setSnapshot(snap);
-  state.h.push(snap.time, snap.H);
+  if (state.streamed !== undefined && snap.time < state.streamed) {
+    // Back in time (a replay sought backwards, a coordinator restarted):
+    // the history up to the new moment.
+    state.h.clear();
+    loadHistory();
+  }
+  state.streamed = snap.time;
+  // A snapshot the history already holds (sent before it was read) is not
+  // charted twice.
+  const last = state.h.last();
+  if (!last || snap.time > last[0]) state.h.push(snap.time, snap.H);
   const live = snap.vessels.filter((v) => v.live).length;
   $("summary").textContent =
     `t = ${snap.time.toFixed(1)} s · H = ${snap.H.toFixed(1)} · ${live}/${snap.vessels.length} vessels live`;
   if (document.activeElement !== $("base-input")) $("base-input").value = snap.mission.risk.base;
+  const n = snap.mission.risk.objects.length;
+  $("risk-readout").textContent = `base φ₀ = ${snap.mission.risk.base} · ${n} object${n === 1 ? "" : "s"}`;
   syncObjectForm();
   const v = snap.vessels.find((v) => v.id === state.selectedVessel);
   if (v && v.pose) {
@@ -110,7 +176,8 @@ function drawTable(snap) {
   if (body.dataset.ids !== ids) {
     body.dataset.ids = ids;
     body.innerHTML = snap.vessels
-      .map((v) => `<tr data-vessel-id="${escape(v.id)}"><td>${escape(v.id)}</td><td></td><td></td><td></td><td></td></tr>`)
+      .map((v) => `<tr data-vessel-id="${escape(v.id)}"><td>${escape(v.id)}</td><td></td>`
+        + '<td class="num"></td><td class="num"></td><td class="num"></td></tr>')
       .join("");
   }
   snap.vessels.forEach((v, i) => {
@@ -118,18 +185,38 @@ function drawTable(snap) {
     const cells = row.cells;
     const link = v.connected ? (v.live ? "live" : "silent") : "off";
     // A vessel an operator has taken over (an autopilot out of GUIDED)
-    // keeps its cell but follows no command.
+    // keeps its cell but follows no command: a compact badge, the detail
+    // on hover (and in text for screen readers), so the table stays narrow.
     const mode = v.pose && v.pose.telemetry && v.pose.telemetry.mode;
     const operator = v.controlled === false;
-    cells[1].textContent = operator ? `${link} · operator${mode ? ` (${mode})` : ""}` : link;
-    cells[1].title = operator ? "not under control: the coordinator's commands are not followed" : "";
+    drawLink(cells[1], link, operator, mode);
     cells[1].className = !v.connected ? "off" : operator ? "operator" : "";
     cells[2].textContent = v.last_command ? v.last_command.E.toFixed(2) : "–";
     cells[3].textContent = v.pose ? Math.hypot(v.pose.u, v.pose.v).toFixed(2) : "–";
-    cells[4].textContent = v.last_seen == null ? "never" : `${Math.max(0, snap.time - v.last_seen).toFixed(1)} s ago`;
+    cells[4].textContent = v.last_seen == null ? "never" : Math.max(0, snap.time - v.last_seen).toFixed(1);
     row.classList.toggle("selected", v.id === state.selectedVessel);
   });
   $("vessel-count").textContent = `(${snap.vessels.length})`;
+}
+
+/** The link cell: its state, and an operator's badge; rebuilt on change only. */
+function drawLink(cell, link, operator, mode) {
+  const key = `${link}|${operator}|${mode || ""}`;
+  if (cell.dataset.key === key) return;
+  cell.dataset.key = key;
+  cell.textContent = link;
+  cell.title = "";
+  if (!operator) return;
+  const detail = `operator${mode ? ` (${mode})` : ""}`;
+  const badge = document.createElement("span");
+  badge.className = "badge";
+  badge.textContent = "op";
+  badge.setAttribute("aria-hidden", "true");
+  const spoken = document.createElement("span");
+  spoken.className = "sr-only";
+  spoken.textContent = ` · ${detail}`;
+  cell.append(badge, spoken);
+  cell.title = `${link} · ${detail}: not under control, the coordinator's commands are not followed`;
 }
 
 function escape(s) {
@@ -302,7 +389,8 @@ canvas.addEventListener("pointerdown", (event) => {
     press = null; // a pinch, not a click
     return;
   }
-  const object = view.objectAt(sx, sy);
+  // A replay's objects are not edited: a press only pans.
+  const object = REPLAY ? null : view.objectAt(sx, sy);
   press = { x: sx, y: sy, lastX: sx, lastY: sy, object: object ? object.id : null, moved: false };
 });
 
@@ -346,7 +434,7 @@ function release(event) {
     moveObject(p.object, wx, wy);
   } else if (p.object) {
     selectObject(p.object);
-  } else if (!p.moved) {
+  } else if (!p.moved && !REPLAY) {
     addObject(wx, wy);
   }
 }
@@ -375,3 +463,4 @@ const wanted = new URLSearchParams(location.search).get("vessel");
 if (wanted) selectVessel(wanted);
 
 connect();
+loadHistory();

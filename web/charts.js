@@ -3,8 +3,14 @@
 // dozen lines, and the page must not depend on a registry.
 
 export class Series {
-  constructor(capacity = 600) {
+  /**
+   * At most `capacity` points. Past it, the oldest point goes (`thin`
+   * false), or every other point does (`thin` true: the series keeps its
+   * start and spans all it was given, as the coordinator's H history does).
+   */
+  constructor(capacity = 600, { thin = false } = {}) {
     this.capacity = capacity;
+    this.thin = thin;
     this.points = [];
   }
   push(t, ...values) {
@@ -12,7 +18,27 @@ export class Series {
     if (last && t < last[0]) this.points = []; // the mission clock restarted
     if (last && t === last[0]) return;
     this.points.push([t, ...values]);
-    if (this.points.length > this.capacity) this.points.shift();
+    this.bound();
+  }
+  /** Puts the `points` older than the series' first before it. */
+  prepend(points) {
+    const first = this.points[0];
+    const older = first ? points.filter((p) => p[0] < first[0]) : points;
+    this.points = older.concat(this.points);
+    this.bound();
+  }
+  last() {
+    return this.points[this.points.length - 1];
+  }
+  bound() {
+    if (!this.thin) {
+      if (this.points.length > this.capacity) this.points.splice(0, this.points.length - this.capacity);
+      return;
+    }
+    while (this.points.length > this.capacity) {
+      const n = this.points.length;
+      this.points = this.points.filter((_, i) => i % 2 === 0 || i === n - 1);
+    }
   }
   clear() {
     this.points = [];

@@ -63,6 +63,13 @@ export class MapView {
     this.ox = 0;
     this.oy = 0;
     this.fitted = false;
+    // Whether the view is still the fitted one (no pan or zoom since):
+    // then it is fitted again when the canvas or its overlays change.
+    this.autoFit = false;
+    this.fitKey = "";
+    // The bands at the top and bottom of the canvas [CSS px] that overlays
+    // (buttons, legend, hints) cover; app.js measures them.
+    this.insets = () => ({ top: 0, bottom: 0 });
     this.mission = null;
     this.vessels = [];
     this.trails = new Map();
@@ -81,6 +88,15 @@ export class MapView {
         const started = performance.now();
         this.draw();
         this.onDraw?.();
+        // An overlay shown or resized by that draw (the scale bar appears
+        // with an origin): fitted again at once, in the same frame, so
+        // that nothing reads the view and its overlays out of step.
+        if (this.autoFit && this.mission && JSON.stringify(this.insets()) !== this.fitKey) {
+          this.fit();
+          this.dirty = false;
+          this.draw();
+          this.onDraw?.();
+        }
         // Cost of the last draws (ms, moving average), for the console and
         // the smoothness measurement in the README.
         const ms = performance.now() - started;
@@ -100,7 +116,7 @@ export class MapView {
     this.canvas.width = Math.round(this.width * dpr);
     this.canvas.height = Math.round(this.height * dpr);
     this.dpr = dpr;
-    if (!this.fitted) this.fit();
+    if (!this.fitted || this.autoFit) this.fit();
     this.dirty = true;
   }
 
@@ -112,18 +128,32 @@ export class MapView {
     return [(sx - this.ox) / this.scale, (this.oy - sy) / this.scale];
   }
 
-  /** Fits the whole region into the canvas with a margin. */
+  /**
+   * Fits the whole region, with a margin, into the canvas between the bands
+   * its overlays cover at the top and the bottom, so that none hides any of
+   * it.
+   */
   fit() {
     if (!this.mission) return;
     const b = bounds(this.mission.region.polygon);
     const w = Math.max(b.x1 - b.x0, 1e-9);
     const h = Math.max(b.y1 - b.y0, 1e-9);
-    const margin = 24;
-    this.scale = Math.min((this.width - 2 * margin) / w, (this.height - 2 * margin) / h);
+    const insets = this.insets();
+    this.fitKey = JSON.stringify(insets);
+    const margin = 16;
+    // The free band; on a canvas too short for it, the whole canvas.
+    let top = insets.top + margin;
+    let bottom = this.height - insets.bottom - margin;
+    if (bottom - top < this.height / 3) {
+      top = margin;
+      bottom = this.height - margin;
+    }
+    this.scale = Math.min((this.width - 2 * margin) / w, (bottom - top) / h);
     if (!(this.scale > 0)) this.scale = 1;
     this.ox = this.width / 2 - this.scale * (b.x0 + w / 2);
-    this.oy = this.height / 2 + this.scale * (b.y0 + h / 2);
+    this.oy = (top + bottom) / 2 + this.scale * (b.y0 + h / 2);
     this.fitted = true;
+    this.autoFit = true;
     this.dirty = true;
   }
 
@@ -133,12 +163,14 @@ export class MapView {
     this.scale *= factor;
     this.ox = sx - this.scale * wx;
     this.oy = sy + this.scale * wy;
+    this.autoFit = false;
     this.dirty = true;
   }
 
   pan(dx, dy) {
     this.ox += dx;
     this.oy += dy;
+    this.autoFit = false;
     this.dirty = true;
   }
 

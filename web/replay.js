@@ -1,11 +1,16 @@
-// The replay bar: shown only when the server is `seacover replay` (its
-// GET /api/v1/replay answers; a coordinator's is a 404). Play and pause,
+// The replay bar, started only on a page `seacover replay` served (the
+// server marks it, `<html data-mode="replay">`; a coordinator's page never
+// asks for GET /api/v1/replay, which it would answer 404). Play and pause,
 // speed, and a time slider that seeks (PUT /api/v1/replay); the replay's
 // next snapshot, on the same stream as a live coordinator's, moves the map.
 
 const $ = (id) => document.getElementById(id);
 
-export async function startReplayBar(onSeek) {
+/**
+ * Starts the bar; `seeking` is called before a seek, `sought` once the
+ * replay is at the new time.
+ */
+export async function startReplayBar({ seeking = () => {}, sought = () => {} } = {}) {
   let status;
   try {
     const r = await fetch("/api/v1/replay");
@@ -44,8 +49,10 @@ export async function startReplayBar(onSeek) {
   }
 
   async function seek(time) {
-    onSeek();
-    return put({ time });
+    seeking();
+    const answer = await put({ time });
+    sought();
+    return answer;
   }
 
   $("replay-play").addEventListener("click", () => put({ playing: !status.playing }));

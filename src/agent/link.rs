@@ -102,6 +102,10 @@ pub enum HandshakeError {
     Url(#[source] tokio_tungstenite::tungstenite::Error),
     #[error("connecting: {0}")]
     Connect(#[source] tokio_tungstenite::tungstenite::Error),
+    /// The coordinator answered the upgrade with an HTTP error (a wrong
+    /// token's 401, a 429), with its JSON error's message when it has one.
+    #[error("refused with HTTP {status}: {message}")]
+    Rejected { status: u16, message: String },
     #[error("sending hello: {0}")]
     Hello(#[source] tokio_tungstenite::tungstenite::Error),
     #[error("refused: {code}: {message}")]
@@ -114,6 +118,15 @@ pub enum HandshakeError {
     Closed,
     #[error("before the welcome: {0}")]
     Transport(#[source] tokio_tungstenite::tungstenite::Error),
+}
+
+/// The message of an HTTP error's body: SPEC §3's `{"error": {"message"}}`,
+/// or the body as text.
+fn http_message(body: Option<&[u8]>) -> String {
+    let body = body.unwrap_or_default();
+    serde_json::from_slice::<crate::protocol::ErrorDocument>(body)
+        .map(|d| d.error.message)
+        .unwrap_or_else(|_| String::from_utf8_lossy(body).trim().to_string())
 }
 
 /// Connects to `url` (with the bearer token), says `hello` and waits for the
@@ -133,7 +146,13 @@ pub async fn handshake(
         .read_buffer_size(4 * 1024);
     let (mut socket, _) = tokio_tungstenite::connect_async_with_config(request, Some(config), true)
         .await
-        .map_err(HandshakeError::Connect)?;
+        .map_err(|e| match e {
+            tokio_tungstenite::tungstenite::Error::Http(response) => HandshakeError::Rejected {
+                status: response.status().as_u16(),
+                message: http_message(response.body().as_deref()),
+            },
+            e => HandshakeError::Connect(e),
+        })?;
     socket
         .send(text(hello))
         .await
@@ -180,6 +199,7 @@ pub async fn run(
             astern: config.astern,
             agility: config.agility,
         };
+        tracing::info!(vessel = %config.vessel, url = %config.url, "connecting to the coordinator");
         let connected = tokio::select! {
             _ = shutdown.cancelled() => return,
             c = handshake(&config.url, config.token.as_deref(), &hello) => c,
@@ -187,10 +207,16 @@ pub async fn run(
         let socket = match connected {
             Ok(socket) => socket,
             Err(e) => {
-                if let HandshakeError::Refused { code, message } = &e {
-                    tracing::warn!(vessel = %config.vessel, %code, %message, "coordinator error");
-                }
                 let wait = backoff.mul_f64(rng.random_range(0.5..1.5));
+                let retry_in_ms = wait.as_millis() as u64;
+                match &e {
+                    HandshakeError::Refused { .. } | HandshakeError::Rejected { .. } => {
+                        tracing::warn!(vessel = %config.vessel, error = %e, retry_in_ms, "the coordinator refused the link; retrying");
+                    }
+                    _ => {
+                        tracing::info!(vessel = %config.vessel, error = %e, retry_in_ms, "cannot reach the coordinator; retrying");
+                    }
+                }
                 tokio::select! {
                     _ = shutdown.cancelled() => return,
                     _ = tokio::time::sleep(wait) => {}
@@ -199,6 +225,7 @@ pub async fn run(
                 continue;
             }
         };
+        tracing::info!(vessel = %config.vessel, url = %config.url, "connected to the coordinator");
         backoff = Duration::from_millis(100);
         let (mut sink, mut stream) = socket.split();
         // The pose current at connection goes out at once, not only the
@@ -243,6 +270,9 @@ pub async fn run(
                     Some(Ok(_)) => {}
                 },
             }
+        }
+        if !shutdown.is_cancelled() {
+            tracing::warn!(vessel = %config.vessel, "link to the coordinator lost; reconnecting");
         }
         // Unlike a command, the loss is not dropped when the vessel is
         // behind: it is the one message that must arrive (and the vessel

@@ -6,8 +6,10 @@ use std::sync::Arc;
 use super::scenario::ScenarioError;
 use super::{Mission, MissionError, origin_frame, risk_field};
 use crate::control::safety::SafetyLayer;
+use crate::coverage::InputError;
+use crate::geometry::{Point, Region, norm2};
 use crate::protocol::{
-    MissionDocument, OriginDocument, RegionInput, RiskObjectDocument, RiskObjectInput,
+    MissionDocument, OriginDocument, RegionInput, RiskDocument, RiskObjectDocument, RiskObjectInput,
 };
 
 /// One write of the REST API. Geographic inputs are placed in the plane by
@@ -67,6 +69,7 @@ impl Mission {
                 let mut object =
                     crate::mission::georef::input::risk_object(object, frame.as_ref(), "")
                         .map_err(placed)?;
+                check_object(&object, &next.region)?;
                 let id = match &object.id {
                     Some(id) => {
                         if !crate::mission::scenario::valid_id(id) {
@@ -104,6 +107,7 @@ impl Mission {
             MissionChange::PutObject(id, object) => {
                 let object = crate::mission::georef::input::risk_object(object, frame.as_ref(), "")
                     .map_err(placed)?;
+                check_object(&object, &next.region)?;
                 let slot = next
                     .risk_doc
                     .objects
@@ -135,4 +139,39 @@ impl Mission {
         };
         Ok((next, answer))
     }
+}
+
+/// How far a risk object reaches, in σ: beyond 5σ its density is below
+/// exp(−12.5) ≈ 4e-6 of its peak.
+const REACH_SIGMAS: f64 = 5.0;
+
+/// Checks one risk object as the request wrote it, before it joins the
+/// mission's list: errors name the request's own fields (`sigma`, not
+/// `risk.objects[3].sigma`), and an object whose whole 5σ disc lies outside
+/// the region is refused, since it cannot change the coverage.
+fn check_object(object: &RiskObjectDocument, region: &Region) -> Result<(), MissionError> {
+    let alone = RiskDocument {
+        base: 0.0,
+        objects: vec![object.clone()],
+    };
+    risk_field(&alone).map_err(|e| match e {
+        MissionError::Scenario(ScenarioError::Input(InputError::Invalid { field, reason })) => {
+            let field = field.strip_prefix("risk.objects[0].").unwrap_or(&field);
+            MissionError::Invalid(format!("{field}: {reason}"))
+        }
+        other => other,
+    })?;
+    let centre = Point {
+        x: object.x,
+        y: object.y,
+    };
+    let reach = REACH_SIGMAS * object.sigma;
+    let distance = norm2(region.closest_point(centre) - centre).sqrt();
+    if !region.contains(centre) && distance > reach {
+        return Err(MissionError::Invalid(format!(
+            "x, y: the object lies {distance:.1} m outside the region, farther than its \
+             5σ reach ({reach:.1} m), so it cannot change the coverage"
+        )));
+    }
+    Ok(())
 }

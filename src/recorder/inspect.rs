@@ -44,9 +44,18 @@ pub struct Info {
     pub duration: f64,
     pub vessels: Vec<String>,
     pub channels: Vec<ChannelInfo>,
-    /// H at the first and the last tick.
+    /// H at the first and the last tick with at least one vessel in the
+    /// partition (a live vessel, so a cell): a tick without one has H = 0
+    /// (a coordinator waiting for its first pose, or after its last), which
+    /// says nothing of the coverage. `null` when no tick had a vessel.
     pub h_start: Option<f64>,
     pub h_end: Option<f64>,
+    /// Mission time of those two ticks [s].
+    pub h_start_time: Option<f64>,
+    pub h_end_time: Option<f64>,
+    /// Coverage ticks recorded, and how many of them had no vessel.
+    pub ticks: usize,
+    pub ticks_without_vessels: usize,
     /// Silences longer than [`GAP`] on the coverage channel (the
     /// coordinator's ticks) and in each vessel's poses.
     pub gaps: Vec<Gap>,
@@ -81,7 +90,9 @@ fn seconds(ns: u64) -> f64 {
 pub fn info(recording: &Recording) -> Result<Info, InspectError> {
     let (start, end) = recording.span().unwrap_or((0, 0));
     let mut vessels = BTreeSet::new();
-    let mut h: Option<(f64, f64)> = None;
+    // (time, H) of the first and the last tick with vessels.
+    let mut h: Option<((f64, f64), (f64, f64))> = None;
+    let (mut ticks, mut ticks_without_vessels) = (0, 0);
     let mut gaps = Vec::new();
     let mut last_tick: Option<f64> = None;
     let mut last_pose: BTreeMap<String, f64> = BTreeMap::new();
@@ -92,7 +103,13 @@ pub fn info(recording: &Recording) -> Result<Info, InspectError> {
         if &*m.topic == messages::COVERAGE {
             let c: CoverageRecord = decode(&m.topic, &m.data)?;
             vessels.extend(c.vessels.iter().map(|v| v.id.clone()));
-            h = Some(h.map_or((c.h, c.h), |(first, _)| (first, c.h)));
+            ticks += 1;
+            if c.cells.is_empty() {
+                ticks_without_vessels += 1;
+            } else {
+                let now = (c.time, c.h);
+                h = Some(h.map_or((now, now), |(first, _)| (first, now)));
+            }
             if let Some(prev) = last_tick
                 && t - prev > GAP
             {
@@ -136,8 +153,12 @@ pub fn info(recording: &Recording) -> Result<Info, InspectError> {
                 messages: n,
             })
             .collect(),
-        h_start: h.map(|h| h.0),
-        h_end: h.map(|h| h.1),
+        h_start: h.map(|h| h.0.1),
+        h_end: h.map(|h| h.1.1),
+        h_start_time: h.map(|h| h.0.0),
+        h_end_time: h.map(|h| h.1.0),
+        ticks,
+        ticks_without_vessels,
         gaps,
     })
 }
@@ -163,13 +184,20 @@ pub fn print_info(info: &Info, out: &mut impl Write) -> std::io::Result<()> {
         info.vessels.len(),
         names(&info.vessels)
     )?;
-    let h = |v: Option<f64>| v.map_or("-".to_string(), |h| format!("{h:.6}"));
-    writeln!(
-        out,
-        "H         {} at start, {} at end",
-        h(info.h_start),
-        h(info.h_end)
-    )?;
+    match (info.h_start, info.h_end, info.h_start_time, info.h_end_time) {
+        (Some(h0), Some(h1), Some(t0), Some(t1)) => writeln!(
+            out,
+            "H         {h0:.6} at {t0:.1} s, {h1:.6} at {t1:.1} s (the first and last of the ticks with vessels: {} of {})",
+            info.ticks - info.ticks_without_vessels,
+            info.ticks
+        )?,
+        _ if info.ticks == 0 => writeln!(out, "H         - (no coverage ticks)")?,
+        _ => writeln!(
+            out,
+            "H         - (none of the {} ticks had a vessel)",
+            info.ticks
+        )?,
+    }
     writeln!(out, "channels")?;
     for c in &info.channels {
         writeln!(out, "  {:<32} {:>9}  {}", c.topic, c.messages, c.schema)?;
@@ -387,6 +415,100 @@ fn coverage_csv(recording: &Recording, out: &mut impl Write) -> Result<(), Inspe
 #[cfg(test)]
 mod tests {
     use super::names;
+    use super::{info, print_info};
+    use crate::recorder::messages::{self, CellRecord, CoverageRecord, VesselState};
+    use crate::recorder::reader::Recording;
+
+    /// A recording of coverage ticks `(time, H, with a vessel)`, written
+    /// with the mcap crate as the recorder writes its channels.
+    fn coverage_recording(ticks: &[(f64, f64, bool)]) -> Recording {
+        let mut w = mcap::Writer::new(std::io::Cursor::new(Vec::new())).expect("a writer");
+        let spec = messages::spec::<CoverageRecord>();
+        let schema = w
+            .add_schema(&spec.schema_name, "jsonschema", &spec.schema)
+            .expect("a schema");
+        let channel = w
+            .add_channel(schema, messages::COVERAGE, "json", &Default::default())
+            .expect("a channel");
+        for (k, &(time, h, vessel)) in ticks.iter().enumerate() {
+            let record = CoverageRecord {
+                tick: k as u64,
+                time,
+                h,
+                cells: if vessel {
+                    vec![CellRecord {
+                        id: "usv-1".into(),
+                        mass: h,
+                        centroid: [50.0, 50.0],
+                        area: 10_000.0,
+                        polygon: None,
+                        pieces: Vec::new(),
+                    }]
+                } else {
+                    Vec::new()
+                },
+                vessels: vec![VesselState {
+                    id: "usv-1".into(),
+                    connected: vessel,
+                    live: vessel,
+                    controlled: vessel,
+                    last_seen: None,
+                }],
+            };
+            let ns = (time * 1e9).round() as u64;
+            w.write_to_known_channel(
+                &mcap::records::MessageHeader {
+                    channel_id: channel,
+                    sequence: k as u32,
+                    log_time: ns,
+                    publish_time: ns,
+                },
+                &serde_json::to_vec(&record).expect("serializes"),
+            )
+            .expect("written");
+        }
+        w.finish().expect("finished");
+        let bytes = w.into_inner().into_inner();
+        Recording::from_bytes(std::path::Path::new("test.mcap"), bytes).expect("reads back")
+    }
+
+    #[test]
+    fn h_is_reported_over_the_ticks_with_vessels() {
+        // A bridge's recording: no vessel at the first tick (waiting for
+        // the first pose) nor at the last two (the link gone).
+        let recording = coverage_recording(&[
+            (0.0, 0.0, false),
+            (0.1, 6500.25, true),
+            (0.2, 6480.0, true),
+            (0.3, 6512.5, true),
+            (0.4, 0.0, false),
+            (0.5, 0.0, false),
+        ]);
+        let i = info(&recording).expect("info");
+        assert_eq!((i.h_start, i.h_end), (Some(6500.25), Some(6512.5)));
+        assert_eq!((i.h_start_time, i.h_end_time), (Some(0.1), Some(0.3)));
+        assert_eq!((i.ticks, i.ticks_without_vessels), (6, 3));
+        let mut text = Vec::new();
+        print_info(&i, &mut text).expect("printed");
+        let text = String::from_utf8(text).expect("UTF-8");
+        assert!(
+            text.contains(
+                "H         6500.250000 at 0.1 s, 6512.500000 at 0.3 s (the first and last of the ticks with vessels: 3 of 6)"
+            ),
+            "{text}"
+        );
+        // No tick with a vessel: no H, and the line says why.
+        let empty =
+            info(&coverage_recording(&[(0.0, 0.0, false), (0.1, 0.0, false)])).expect("info");
+        assert_eq!((empty.h_start, empty.h_end), (None, None));
+        let mut text = Vec::new();
+        print_info(&empty, &mut text).expect("printed");
+        let text = String::from_utf8(text).expect("UTF-8");
+        assert!(
+            text.contains("H         - (none of the 2 ticks had a vessel)"),
+            "{text}"
+        );
+    }
 
     #[test]
     fn a_big_fleet_is_named_in_one_short_line() {

@@ -206,7 +206,7 @@ impl Writer {
             .compression_threads(0)
             // zstd's level 1: at 1000 vessels (about 10 MB/s of JSON) it
             // costs half the CPU of the default level 3 for files 4 % larger
-            // (README, "Recording, replay and inspection").
+            // (docs/recording.md).
             .compression_level(1);
         let mcap = options
             .create(BufWriter::with_capacity(1 << 20, file))
@@ -523,8 +523,7 @@ impl Writer {
 /// the coordinator's tick and links then run first whenever the cores are
 /// busy, and the writer catches up from the hand-over's buffer (seconds of
 /// entries) when they are idle. Without it a 1000-vessel recording moved the
-/// command p99 by about a millisecond (README, "Recording, replay and
-/// inspection"). Elsewhere, and where the call is refused, the thread keeps
+/// command p99 by about a millisecond (docs/recording.md). Elsewhere, and where the call is refused, the thread keeps
 /// its priority.
 fn yield_to_the_coordinator() {
     #[cfg(target_os = "linux")]
@@ -546,6 +545,12 @@ fn utc_stamp() -> String {
     time::OffsetDateTime::now_utc()
         .format(&format)
         .unwrap_or_else(|_| "recording".into())
+}
+
+/// A new recording's file in `dir`, named by the UTC time now, as every
+/// process that records names its files.
+pub fn new_file(dir: &Path) -> PathBuf {
+    unused_name(dir, &utc_stamp())
 }
 
 /// `dir/stamp.mcap`, or `dir/stamp-N.mcap` when that exists (two files

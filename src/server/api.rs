@@ -443,3 +443,20 @@ pub async fn delete_object(
         change(&app, MissionChange::DeleteObject(id)).await?,
     ))
 }
+
+/// H(P) from the mission's first tick to about the newest, bounded: every
+/// tick at first; once 1000 samples are held, every other one is dropped
+/// and the stride doubles, so the history spans the whole mission. A
+/// replay answers it from its recording up to the replay's time.
+#[utoipa::path(
+    get,
+    path = "/api/v1/coverage/history",
+    tag = "coverage",
+    responses((status = 200, description = "The stride and the samples (tick, mission time, H), oldest first.", body = crate::protocol::CoverageHistoryDocument)),
+)]
+pub async fn coverage_history(
+    State(app): State<AppState>,
+) -> Json<crate::protocol::CoverageHistoryDocument> {
+    let history = app.snapshot.borrow().history.clone();
+    Json(history.as_ref().clone())
+}

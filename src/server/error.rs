@@ -30,6 +30,10 @@ pub enum ApiError {
     Unsupported(String),
     #[error("{0}")]
     Conflict(String),
+    /// The route exists, but not with this method (`Allow` lists those it
+    /// has).
+    #[error("{0}")]
+    MethodNotAllowed(String),
     #[error("a valid `Authorization: Bearer TOKEN` is required")]
     Unauthorized,
     #[error("the coordinator is shutting down")]
@@ -51,6 +55,7 @@ impl ApiError {
             ApiError::Invalid(_) => "invalid",
             ApiError::Unsupported(_) => "unsupported",
             ApiError::Conflict(_) => "conflict",
+            ApiError::MethodNotAllowed(_) => "method_not_allowed",
             ApiError::Unauthorized => "unauthorized",
             ApiError::ShuttingDown => "shutting_down",
             ApiError::TooLarge(_) => "too_large",
@@ -65,6 +70,7 @@ impl ApiError {
             ApiError::NotFound(_) => StatusCode::NOT_FOUND,
             ApiError::Invalid(_) | ApiError::Unsupported(_) => StatusCode::UNPROCESSABLE_ENTITY,
             ApiError::Conflict(_) => StatusCode::CONFLICT,
+            ApiError::MethodNotAllowed(_) => StatusCode::METHOD_NOT_ALLOWED,
             ApiError::Unauthorized => StatusCode::UNAUTHORIZED,
             ApiError::ShuttingDown => StatusCode::SERVICE_UNAVAILABLE,
             ApiError::TooLarge(_) => StatusCode::PAYLOAD_TOO_LARGE,
@@ -108,6 +114,13 @@ impl IntoResponse for ApiError {
     fn into_response(self) -> Response {
         let mut response = (self.status(), Json(self.document())).into_response();
         response.extensions_mut().insert(ErrorCode(self.code()));
+        if let ApiError::Unauthorized = self {
+            // RFC 6750: the scheme a client must use.
+            response.headers_mut().insert(
+                axum::http::header::WWW_AUTHENTICATE,
+                axum::http::HeaderValue::from_static("Bearer"),
+            );
+        }
         if let ApiError::RateLimited(_) = self {
             // The bucket refills one write per 1/rate s; one second is a
             // safe, simple hint.
@@ -118,6 +131,17 @@ impl IntoResponse for ApiError {
         }
         response
     }
+}
+
+/// The answer to a path no route has: SPEC §3's JSON error, not an empty
+/// body.
+pub async fn not_found(uri: axum::http::Uri) -> ApiError {
+    ApiError::NotFound(format!("no such path: {}", uri.path()))
+}
+
+/// The answer to a method a route does not have; the router adds `Allow`.
+pub async fn method_not_allowed(method: axum::http::Method, uri: axum::http::Uri) -> ApiError {
+    ApiError::MethodNotAllowed(format!("{method} is not allowed on {}", uri.path()))
 }
 
 /// Gives the 413 that the body limit answers (plain text, from axum) the

@@ -38,7 +38,10 @@ pub async fn record_rejections(
     request: Request,
     next: Next,
 ) -> Response {
-    if !app.recorder.is_on() {
+    // A refused vessel link (a wrong token, too many writes) is logged as
+    // well: an operator starting an agent wants to see why it is not there.
+    let link = request.uri().path() == "/api/v1/vessels/link";
+    if !app.recorder.is_on() && !link {
         return next.run(request).await;
     }
     let peer = request
@@ -53,12 +56,22 @@ pub async fn record_rejections(
             .extensions()
             .get::<ErrorCode>()
             .map_or_else(|| status.as_u16().to_string(), |c| c.0.to_string());
-        app.recorder.event(
-            EventRecord::new(app.clock.now(), EventKind::RejectedRequest)
-                .code(code)
-                .peer(peer)
-                .detail(detail),
-        );
+        if link {
+            tracing::warn!(
+                peer = %peer.map_or_else(|| "?".to_string(), |p| p.to_string()),
+                status = status.as_u16(),
+                %code,
+                "vessel link refused"
+            );
+        }
+        if app.recorder.is_on() {
+            app.recorder.event(
+                EventRecord::new(app.clock.now(), EventKind::RejectedRequest)
+                    .code(code)
+                    .peer(peer)
+                    .detail(detail),
+            );
+        }
     }
     response
 }

@@ -9,6 +9,7 @@
 pub mod api;
 mod app;
 pub mod auth;
+mod close;
 pub mod config;
 pub mod coordinator;
 pub mod error;
@@ -62,6 +63,9 @@ pub struct ServeConfig {
     pub write_burst: u32,
     /// Where the run is recorded; `None`: not recorded.
     pub record: Option<RecorderConfig>,
+    /// Where `mission` comes from, for the log line that says a new data
+    /// directory was seeded with it.
+    pub mission_source: String,
 }
 
 impl Default for ServeConfig {
@@ -75,6 +79,7 @@ impl Default for ServeConfig {
             write_rate: 50,
             write_burst: 100,
             record: None,
+            mission_source: "the built-in paper scenario".into(),
         }
     }
 }
@@ -134,22 +139,50 @@ pub fn router(app: AppState) -> Router {
         .route("/api/v1/coverage", get(api::coverage))
         .route("/api/v1/coverage.geojson", get(api::coverage_geojson))
         .route("/api/v1/coverage/evaluate", post(api::evaluate))
+        .route("/api/v1/coverage/history", get(api::coverage_history))
         .route("/api/v1/stream", get(ws::stream))
+        .fallback(error::not_found)
+        .method_not_allowed_fallback(error::method_not_allowed)
         .layer(axum::middleware::map_response(error::json_too_large))
         .layer(DefaultBodyLimit::max(MAX_BODY))
         .layer(axum::middleware::from_fn_with_state(
             app.clone(),
             events::record_rejections,
         ))
+        .layer(axum::middleware::from_fn(close::unread_bodies))
         .with_state(app)
 }
 
-/// Serves on `listener` until `shutdown` is cancelled.
+/// Serves on `listener` until `shutdown` is cancelled: [`prepare`], then
+/// [`Prepared::run`].
 pub async fn serve(
     listener: TcpListener,
     config: ServeConfig,
     shutdown: CancellationToken,
 ) -> Result<(), ServeError> {
+    prepare(listener, config, shutdown).await?.run().await
+}
+
+/// A coordinator that has passed every check of its start (the address
+/// and token, the data directory and its lock, the stored mission) and
+/// whose tick task runs, but that accepts no connection yet: what a process
+/// says when it starts ("serving on …") is true only after this.
+pub struct Prepared {
+    listener: TcpListener,
+    app: AppState,
+    tracker: TaskTracker,
+    tick: tokio::task::JoinHandle<()>,
+    recorder: Recorder,
+    recording: Option<crate::recorder::RecorderThread>,
+    shutdown: CancellationToken,
+}
+
+/// Checks the start and starts the tick task; see [`Prepared`].
+pub async fn prepare(
+    listener: TcpListener,
+    config: ServeConfig,
+    shutdown: CancellationToken,
+) -> Result<Prepared, ServeError> {
     let addr = listener.local_addr()?;
     if !addr.ip().is_loopback() && config.token.is_none() {
         return Err(ServeError::PublicWithoutToken(addr));
@@ -175,7 +208,11 @@ pub async fn serve(
                 }
                 None => {
                     store.save(&config.mission.document())?;
-                    tracing::info!(path = %store.path().display(), "new store seeded with the configured mission");
+                    tracing::info!(
+                        path = %store.path().display(),
+                        mission = %config.mission_source,
+                        "new store seeded"
+                    );
                     config.mission
                 }
             };
@@ -214,27 +251,57 @@ pub async fn serve(
         recorder: recorder.clone(),
         clock,
     };
-    let signal = shutdown.clone();
-    // Commands and poses are small frames that must leave at once: without
-    // TCP_NODELAY a command written while the link's previous frame is
-    // unacknowledged waits for the vessel's delayed ACK (up to 40 ms).
-    let listener = listener.tap_io(|tcp| {
-        if let Err(e) = tcp.set_nodelay(true) {
-            tracing::warn!(error = %e, "TCP_NODELAY could not be set on a connection");
-        }
-    });
-    // With the peers' addresses, for the recording's events.
-    let service = router(app).into_make_service_with_connect_info::<SocketAddr>();
-    axum::serve(listener, service)
-        .with_graceful_shutdown(async move { signal.cancelled().await })
-        .await?;
-    tracker.close();
-    let _ = tokio::time::timeout(Duration::from_millis(1500), tracker.wait()).await;
-    let _ = tick.await;
-    // The tick task has recorded the shutdown: finish the file.
-    if let Some(thread) = recording {
-        recorder.finish();
-        let _ = tokio::task::spawn_blocking(move || thread.join()).await;
+    Ok(Prepared {
+        listener,
+        app,
+        tracker,
+        tick,
+        recorder,
+        recording,
+        shutdown,
+    })
+}
+
+impl Prepared {
+    /// Where it will serve.
+    pub fn local_addr(&self) -> std::io::Result<SocketAddr> {
+        self.listener.local_addr()
     }
-    Ok(())
+
+    /// Serves until the shutdown token is cancelled, then stops the links,
+    /// the tick task and the recording in that order.
+    pub async fn run(self) -> Result<(), ServeError> {
+        let Prepared {
+            listener,
+            app,
+            tracker,
+            tick,
+            recorder,
+            recording,
+            shutdown,
+        } = self;
+        // Commands and poses are small frames that must leave at once:
+        // without TCP_NODELAY a command written while the link's previous
+        // frame is unacknowledged waits for the vessel's delayed ACK (up to
+        // 40 ms).
+        let listener = listener.tap_io(|tcp| {
+            if let Err(e) = tcp.set_nodelay(true) {
+                tracing::warn!(error = %e, "TCP_NODELAY could not be set on a connection");
+            }
+        });
+        // With the peers' addresses, for the recording's events.
+        let service = router(app).into_make_service_with_connect_info::<SocketAddr>();
+        axum::serve(listener, service)
+            .with_graceful_shutdown(async move { shutdown.cancelled().await })
+            .await?;
+        tracker.close();
+        let _ = tokio::time::timeout(Duration::from_millis(1500), tracker.wait()).await;
+        let _ = tick.await;
+        // The tick task has recorded the shutdown: finish the file.
+        if let Some(thread) = recording {
+            recorder.finish();
+            let _ = tokio::task::spawn_blocking(move || thread.join()).await;
+        }
+        Ok(())
+    }
 }

@@ -58,6 +58,7 @@ reads are public. The vessel link's messages are also in `api/vessel-link.schema
         api::evaluate,
         vessel_link,
         stream,
+        api::coverage_history,
     ),
     components(
         schemas(ErrorDocument, VesselMessage, CoordinatorMessage, SnapshotDocument),

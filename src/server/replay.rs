@@ -12,6 +12,15 @@
 //! A seek reads only what the moment needs through the recording's chunk
 //! index: the newest coverage and mission messages at or before it and the
 //! poses and commands of the [`LOOKBACK`] before it.
+//!
+//! The H(P) history (`GET /api/v1/coverage/history`) is the coordinator's
+//! bounded [`History`] over the recording's coverage channel up to the
+//! replay's time: playing on reads only the coverage since the last
+//! publication; a seek back reads it again from the start.
+//!
+//! The page is served marked as a replay's ([`PageMode::Replay`]), so the
+//! dashboard shows "replay", hides its editing controls and steers the
+//! player without asking first whether it is one.
 
 use std::collections::HashMap;
 use std::net::SocketAddr;
@@ -29,13 +38,15 @@ use tokio::sync::{mpsc, oneshot, watch};
 use tokio_util::sync::CancellationToken;
 use tokio_util::task::TaskTracker;
 
-use super::coordinator::Request;
+use super::coordinator::history::History;
+use super::coordinator::{Request, Snapshot as Published};
 use super::error::ApiError;
+use super::web::PageMode;
 use super::{AppState, ServeError, router};
 use crate::mission::MissionClock;
 use crate::protocol::{
-    CommandDocument, CoverageDocument, MissionDocument, PoseDocument, Snapshot, SnapshotDocument,
-    VesselStatusDocument,
+    CommandDocument, CoverageDocument, CoverageSampleDocument, MissionDocument, PoseDocument,
+    Snapshot, SnapshotDocument, VesselStatusDocument,
 };
 use crate::recorder::Recorder;
 use crate::recorder::messages::{self, CommandRecord, CoverageRecord, MissionRecord, PoseRecord};
@@ -165,6 +176,36 @@ pub fn snapshot_at(recording: &Recording, at: u64) -> Result<Option<Snapshot>, R
     }))
 }
 
+/// Tick, time and H of the coverage messages logged in `[from, to]` [ns],
+/// oldest first.
+pub fn coverage_samples(
+    recording: &Recording,
+    from: u64,
+    to: u64,
+) -> Result<Vec<CoverageSampleDocument>, ReadError> {
+    /// A coverage message's figures; its cells and vessels are skipped.
+    #[derive(Deserialize)]
+    struct Figures {
+        tick: u64,
+        time: f64,
+        #[serde(rename = "H")]
+        h: f64,
+    }
+    if from > to {
+        return Ok(Vec::new());
+    }
+    Ok(recording
+        .window(from, to, &|t| t == messages::COVERAGE)?
+        .iter()
+        .filter_map(|m| serde_json::from_slice::<Figures>(&m.data).ok())
+        .map(|f| CoverageSampleDocument {
+            tick: f.tick,
+            time: f.time,
+            h: f.h,
+        })
+        .collect())
+}
+
 /// Serves the replay of `file` on `listener` until `shutdown`.
 pub async fn serve(
     listener: TcpListener,
@@ -196,8 +237,15 @@ pub async fn serve(
         .map(|m| m.log_time)
         .ok_or(ReplayError::Empty(file.clone()))?;
     let initial = snapshot_at(&recording, first)?.ok_or(ReplayError::Empty(file.clone()))?;
+    let mut history = History::new();
+    for s in coverage_samples(&recording, 0, first)? {
+        history.push(s.tick, s.time, s.h);
+    }
     super::metrics::handle();
-    let (snapshot_tx, snapshot) = watch::channel(Arc::new(initial));
+    let (snapshot_tx, snapshot) = watch::channel(Arc::new(Published {
+        state: Arc::new(initial),
+        history: history.document(),
+    }));
     let (requests, refusals) = mpsc::channel(64);
     let tracker = TaskTracker::new();
     let app = AppState {
@@ -221,17 +269,21 @@ pub async fn serve(
         playing: true,
         speed,
         out: snapshot_tx,
+        history,
+        read_to: first,
     };
     let tasks = [
         tokio::spawn(refuse_writes(refusals, shutdown.clone())),
         tokio::spawn(player.run(controls, shutdown.clone())),
     ];
     let replay = ReplayState { control };
-    let routes = router(app).merge(
-        axum::Router::new()
-            .route("/api/v1/replay", get(status).put(set))
-            .with_state(replay),
-    );
+    let routes = router(app)
+        .merge(
+            axum::Router::new()
+                .route("/api/v1/replay", get(status).put(set))
+                .with_state(replay),
+        )
+        .layer(axum::Extension(PageMode::Replay));
     let signal = shutdown.clone();
     axum::serve(
         listener,
@@ -285,7 +337,10 @@ struct Player {
     at: u64,
     playing: bool,
     speed: f64,
-    out: watch::Sender<Arc<Snapshot>>,
+    out: watch::Sender<Arc<Published>>,
+    /// H(P) of the coverage messages logged up to `read_to` [ns].
+    history: History,
+    read_to: u64,
 }
 
 impl Player {
@@ -300,16 +355,37 @@ impl Player {
         }
     }
 
-    /// Publishes the state at the current time (decoding off the runtime's
-    /// worker threads).
-    async fn publish(&self) {
+    /// Publishes the state at the current time and the history up to it
+    /// (decoding off the runtime's worker threads).
+    async fn publish(&mut self) {
         let (recording, at) = (self.recording.clone(), self.at);
-        let built = tokio::task::spawn_blocking(move || snapshot_at(&recording, at)).await;
+        // Forwards, the coverage since the last publication; backwards,
+        // all of it again.
+        let back = at < self.read_to;
+        let from = if back { 0 } else { self.read_to + 1 };
+        let built = tokio::task::spawn_blocking(move || {
+            Ok::<_, ReadError>((
+                snapshot_at(&recording, at)?,
+                coverage_samples(&recording, from, at)?,
+            ))
+        })
+        .await;
         match built {
-            Ok(Ok(Some(snapshot))) => {
-                self.out.send_replace(Arc::new(snapshot));
+            Ok(Ok((snapshot, samples))) => {
+                if back {
+                    self.history = History::new();
+                }
+                for s in samples {
+                    self.history.push(s.tick, s.time, s.h);
+                }
+                self.read_to = at;
+                if let Some(snapshot) = snapshot {
+                    self.out.send_replace(Arc::new(Published {
+                        state: Arc::new(snapshot),
+                        history: self.history.document(),
+                    }));
+                }
             }
-            Ok(Ok(None)) => {}
             Ok(Err(e)) => tracing::warn!(error = %e, "reading the recording"),
             Err(e) => tracing::warn!(error = %e, "reading the recording"),
         }

@@ -161,50 +161,41 @@ async fn run_link(mut socket: WebSocket, app: AppState, peer: Option<SocketAddr>
                 agility,
             }) => {
                 if protocol != 1 {
-                    return refuse(
+                    return refuse_hello(
                         socket,
-                        rejected(
-                            &app,
-                            peer,
-                            Some(&vessel),
-                            "unsupported",
-                            format!("protocol {protocol}: only 1 is spoken"),
-                        ),
+                        &app,
+                        peer,
+                        Some(&vessel),
+                        "unsupported",
+                        format!("protocol {protocol}: only 1 is spoken"),
                     )
                     .await;
                 }
                 if !valid_id(&vessel) {
-                    return refuse(
+                    return refuse_hello(
                         socket,
-                        rejected(
-                            &app,
-                            peer,
-                            None,
-                            "invalid",
-                            "vessel: must match [A-Za-z0-9_.-]{1,64}",
-                        ),
+                        &app,
+                        peer,
+                        None,
+                        "invalid",
+                        "vessel: must match [A-Za-z0-9_.-]{1,64}",
                     )
                     .await;
                 }
                 (vessel, actuator, astern, agility)
             }
             Ok(VesselMessage::Pose(_)) => {
-                return refuse(
-                    socket,
-                    rejected(&app, peer, None, "protocol", "a pose before hello"),
-                )
-                .await;
+                return refuse_hello(socket, &app, peer, None, "protocol", "a pose before hello")
+                    .await;
             }
             Err(e) => {
-                return refuse(
+                return refuse_hello(
                     socket,
-                    rejected(
-                        &app,
-                        peer,
-                        None,
-                        "malformed",
-                        format!("expected hello: {e}"),
-                    ),
+                    &app,
+                    peer,
+                    None,
+                    "malformed",
+                    format!("expected hello: {e}"),
                 )
                 .await;
             }
@@ -233,11 +224,7 @@ async fn run_link(mut socket: WebSocket, app: AppState, peer: Option<SocketAddr>
     let tick_hz = match (registered, reply_rx.await) {
         (true, Ok(Ok(hz))) => hz,
         (_, Ok(Err(e))) => {
-            return refuse(
-                socket,
-                rejected(&app, peer, Some(&id), e.code(), e.to_string()),
-            )
-            .await;
+            return refuse_hello(socket, &app, peer, Some(&id), e.code(), e.to_string()).await;
         }
         _ => {
             return refuse(
@@ -259,6 +246,8 @@ async fn run_link(mut socket: WebSocket, app: AppState, peer: Option<SocketAddr>
     }
 
     let vessel: std::sync::Arc<str> = id.as_str().into();
+    let peer_text = peer.map_or_else(|| "?".to_string(), |p| p.to_string());
+    tracing::info!(vessel = %id, peer = %peer_text, "vessel link up");
     app.recorder.event(
         EventRecord::new(app.clock.now(), EventKind::LinkUp)
             .vessel(id.clone())
@@ -338,12 +327,34 @@ async fn run_link(mut socket: WebSocket, app: AppState, peer: Option<SocketAddr>
         }
     }
     let _ = socket.close().await;
+    tracing::info!(vessel = %id, peer = %peer_text, "vessel link down");
     app.recorder.event(
         EventRecord::new(app.clock.now(), EventKind::LinkDown)
             .vessel(id.clone())
             .peer(peer),
     );
     let _ = app.requests.send(Request::Gone { id, link }).await;
+}
+
+/// Refuses a link's hello: logged (who and why), counted, recorded,
+/// answered with the error, and closed.
+async fn refuse_hello(
+    socket: WebSocket,
+    app: &AppState,
+    peer: Option<SocketAddr>,
+    vessel: Option<&str>,
+    code: &str,
+    message: impl Into<String>,
+) {
+    let message = message.into();
+    tracing::warn!(
+        peer = %peer.map_or_else(|| "?".to_string(), |p| p.to_string()),
+        vessel = vessel.unwrap_or("?"),
+        %code,
+        %message,
+        "vessel link refused"
+    );
+    refuse(socket, rejected(app, peer, vessel, code, message)).await
 }
 
 /// Sends a fatal error, then closes the socket properly.

@@ -151,16 +151,24 @@ fn panel<DB: DrawingBackend>(
         .map_err(err)?;
     for (i, (name, points)) in series.iter().enumerate() {
         let color = Palette99::pick(i).to_rgba();
-        chart
-            // 1 px: plotters-bitmap draws wide strokes of near-vertical
-            // segments with spikes far outside the panel.
-            .draw_series(LineSeries::new(
-                points.iter().copied(),
-                color.stroke_width(1),
-            ))
-            .map_err(err)?
-            .label(name.clone())
-            .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], color.stroke_width(2)));
+        // A series is drawn in pieces between its non-finite points (the
+        // breaks of `wrapped_with_breaks`); the first piece carries the
+        // legend.
+        for (k, piece) in segments(points).into_iter().enumerate() {
+            let drawn = chart
+                // 1 px: plotters-bitmap draws wide strokes of near-vertical
+                // segments with spikes far outside the panel.
+                .draw_series(LineSeries::new(
+                    piece.iter().copied(),
+                    color.stroke_width(1),
+                ))
+                .map_err(err)?;
+            if k == 0 {
+                drawn.label(name.clone()).legend(move |(x, y)| {
+                    PathElement::new([(x, y), (x + 18, y)], color.stroke_width(2))
+                });
+            }
+        }
     }
     if legend {
         chart
@@ -172,6 +180,51 @@ fn panel<DB: DrawingBackend>(
             .map_err(err)?;
     }
     Ok(())
+}
+
+/// The runs of consecutive points with a finite value.
+fn segments(points: &[(f64, f64)]) -> Vec<&[(f64, f64)]> {
+    points
+        .split(|p| !p.1.is_finite())
+        .filter(|s| !s.is_empty())
+        .collect()
+}
+
+/// An angle in (−π, π].
+fn wrap(a: f64) -> f64 {
+    use std::f64::consts::PI;
+    let w = a - 2.0 * PI * ((a - PI) / (2.0 * PI)).ceil();
+    // Rounding can leave a value a hair past either end.
+    if w <= -PI { w + 2.0 * PI } else { w.min(PI) }
+}
+
+/// An angle's series wrapped to (−π, π], with a break (a point whose value
+/// is NaN, at the later sample's time) wherever the wrapped value jumps by
+/// more than π between samples: the jump is the wrap, not the angle
+/// moving, and a line across it would span the whole panel.
+fn wrapped_with_breaks(points: &[(f64, f64)]) -> Vec<(f64, f64)> {
+    let mut out = Vec::with_capacity(points.len());
+    let mut previous: Option<f64> = None;
+    for &(t, a) in points {
+        let w = wrap(a);
+        if let Some(p) = previous
+            && (w - p).abs() > std::f64::consts::PI
+        {
+            out.push((t, f64::NAN));
+        }
+        previous = w.is_finite().then_some(w);
+        out.push((t, w));
+    }
+    out
+}
+
+/// A count of episodes of the run, with those the starts put there after
+/// it: `0 incursions (+2 at start)`.
+fn episodes(what: &str, later: usize, at_start: usize) -> String {
+    match at_start {
+        0 => format!("{later} {what}"),
+        n => format!("{later} {what} (+{n} at start)"),
+    }
 }
 
 /// Per-vessel series of `f(tick, vessel sample)`.
@@ -219,14 +272,17 @@ fn tracking<DB: DrawingBackend>(
 ) -> Result<(), String> {
     root.fill(&WHITE).map_err(err)?;
     let cells = root.split_evenly((2, 2));
-    let psi = per_vessel(config, run, |_, v| v.command.psi_e);
+    let mut psi = per_vessel(config, run, |_, v| v.command.psi_e);
+    for (_, points) in &mut psi {
+        *points = wrapped_with_breaks(points);
+    }
     let dist = per_vessel(config, run, |_, v| v.command.e);
     let ue = per_vessel(config, run, |_, v| v.peak_error.0);
     let re = per_vessel(config, run, |_, v| v.peak_error.1);
     let mode = config.guidance.mode.name();
     panel(
         &cells[0],
-        &format!("Fig. 2a heading error ψ_e ({mode})"),
+        &format!("Fig. 2a heading error ψ_e, wrapped to (−π, π] ({mode})"),
         "ψ_e (rad)",
         config.duration,
         &psi,
@@ -259,6 +315,10 @@ fn tracking<DB: DrawingBackend>(
     Ok(())
 }
 
+/// H = ∫ max_i f_i Φ dq: Φ and f_i are pure numbers, so H is an area
+/// weighted by them.
+const H_LABEL: &str = "H(P) (m², weighted by f Φ)";
+
 fn metric<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     config: &Config,
@@ -272,7 +332,7 @@ fn metric<DB: DrawingBackend>(
     panel(
         &halves[0],
         &format!("Fig. 3a H(P), USVs ({mode} guidance)"),
-        "H(P)",
+        H_LABEL,
         config.duration,
         &[(format!("USVs, {mode}"), ours.clone())],
         false,
@@ -280,7 +340,7 @@ fn metric<DB: DrawingBackend>(
     panel(
         &halves[1],
         "Fig. 3b USVs vs Lloyd (ṗ = k (C − p))",
-        "H(P)",
+        H_LABEL,
         config.duration,
         &[
             (format!("USVs, {mode}"), ours),
@@ -322,13 +382,15 @@ fn evolution<DB: DrawingBackend>(
         let mut chart = ChartBuilder::on(area)
             .caption(format!("Fig. 4 t = {:.0} s", snap.t), ("sans-serif", 22))
             .margin(10)
-            .x_label_area_size(30)
-            .y_label_area_size(40)
+            .x_label_area_size(40)
+            .y_label_area_size(56)
             .build_cartesian_2d(x0..x1, y0..y1)
             .map_err(err)?;
         chart
             .configure_mesh()
             .disable_mesh()
+            .x_desc("x (m)")
+            .y_desc("y (m)")
             .label_style(("sans-serif", 13))
             .draw()
             .map_err(err)?;
@@ -433,12 +495,12 @@ fn trails<DB: DrawingBackend>(
     let r = &run.safety;
     let last = run.ticks.last().ok_or("a run has ticks")?;
     let caption = format!(
-        "{} vessels, {:.0} s, filter {}: {} collisions, {} incursions, closest pair {:.1} m, closest to shore {:.1} m, interventions {:.1} %",
+        "{} vessels, {:.0} s, filter {}: {}, {}, closest pair {:.1} m, closest to shore {:.1} m, interventions {:.1} %",
         config.scenario.ids.len(),
         last.t,
         if config.safety.filter { "on" } else { "off" },
-        r.collisions,
-        r.incursions,
+        episodes("collisions", r.collisions, r.collisions_at_start),
+        episodes("incursions", r.incursions, r.incursions_at_start),
         r.min_pair_distance,
         r.min_shore_clearance,
         100.0 * r.intervention_rate(),
@@ -550,4 +612,65 @@ fn trails<DB: DrawingBackend>(
             .map_err(err)?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f64::consts::PI;
+
+    #[test]
+    fn angles_wrap_into_the_half_open_interval() {
+        for (a, w) in [
+            (0.0, 0.0),
+            (PI, PI),
+            (-PI, PI),
+            (3.0 * PI, PI),
+            (1.5 * PI, -0.5 * PI),
+            (-1.5 * PI, 0.5 * PI),
+            (7.0, 7.0 - 2.0 * PI),
+        ] {
+            assert!((wrap(a) - w).abs() < 1e-12, "wrap({a}) = {}", wrap(a));
+        }
+    }
+
+    #[test]
+    fn a_wrapping_angle_is_drawn_in_pieces_without_the_jumps() {
+        // A heading error turning steadily through ±π three times, 0.4 rad
+        // a sample, then stepping by less than π, a real change that stays
+        // joined.
+        let raw: Vec<(f64, f64)> = (0..40)
+            .map(|k| (k as f64, 2.5 + 0.4 * k as f64))
+            .chain([(40.0, 0.3), (41.0, -0.3)])
+            .collect();
+        let points = wrapped_with_breaks(&raw);
+        let pieces = segments(&points);
+        // Every drawn value is wrapped, and no piece has a step above π.
+        for piece in &pieces {
+            for w in piece.windows(2) {
+                assert!((w[1].1 - w[0].1).abs() <= PI, "{w:?}");
+            }
+            for &(_, v) in *piece {
+                assert!(v > -PI && v <= PI, "{v}");
+            }
+        }
+        // Independently: the breaks are where the unwrapped angle
+        // 2.5 + 0.4 k crosses an odd multiple of π between samples (π
+        // between k = 1 and 2, 3π between 17 and 18, 5π between 33 and
+        // 34); the later drop from 18.1 (wrapped −0.75) to 0.3 is 1.05 and
+        // stays joined.
+        let starts: Vec<f64> = pieces.iter().map(|p| p[0].0).collect();
+        assert_eq!(starts, [0.0, 2.0, 18.0, 34.0]);
+        assert_eq!(pieces.iter().map(|p| p.len()).sum::<usize>(), raw.len());
+        // The time of each sample is kept.
+        let times: Vec<f64> = pieces.iter().flat_map(|p| p.iter().map(|q| q.0)).collect();
+        let expected: Vec<f64> = raw.iter().map(|q| q.0).collect();
+        assert_eq!(times, expected);
+    }
+
+    #[test]
+    fn counts_name_what_the_starts_put_there() {
+        assert_eq!(episodes("incursions", 0, 0), "0 incursions");
+        assert_eq!(episodes("incursions", 1, 2), "1 incursions (+2 at start)");
+    }
 }

@@ -33,21 +33,24 @@ pub use config::{
 pub use run::{Measures, Run, Snapshot, Tick, VesselSample, run};
 
 /// Runs `config` and writes `timeseries.csv`, `summary.json`, `safety.json`
-/// and (with `figures`) the five figures into `out`.
+/// and (with `figures`) the five figures into `out`; with `record`, also a
+/// recording in its directory (see [`record::record`]), whose file it
+/// returns.
 pub fn run_to_dir(
     config: &Config,
     out: &std::path::Path,
     figures: bool,
     record: Option<(&std::path::Path, &crate::mission::scenario::LocalScenario)>,
     progress: impl FnMut(f64),
-) -> Result<(output::Summary, output::SafetySummary), SimError> {
+) -> Result<Written, SimError> {
     let io = |e: std::io::Error| SimError::Io(format!("{}: {e}", out.display()));
     std::fs::create_dir_all(out).map_err(io)?;
     let started = std::time::Instant::now();
     let result = run(config, progress)?;
-    if let Some((path, doc)) = record {
-        record::record(path, config, doc, &result)?;
-    }
+    let recording = match record {
+        Some((dir, doc)) => Some(record::record(dir, config, doc, &result)?),
+        None => None,
+    };
     let wall = started.elapsed().as_secs_f64();
     let summary = output::Summary::new(config, &result, wall);
     let safety = output::SafetySummary::new(config, &result);
@@ -57,5 +60,17 @@ pub fn run_to_dir(
     if figures {
         figures::draw_all(out, config, &result).map_err(SimError::Figure)?;
     }
-    Ok((summary, safety))
+    Ok(Written {
+        summary,
+        safety,
+        recording,
+    })
+}
+
+/// What [`run_to_dir`] wrote.
+pub struct Written {
+    pub summary: output::Summary,
+    pub safety: output::SafetySummary,
+    /// The recording's file, when it recorded.
+    pub recording: Option<std::path::PathBuf>,
 }

@@ -12,6 +12,13 @@
 //!   the safety distance, or of a centre closer than the shore distance to
 //!   ∂Q — what the filter is meant to prevent, stricter than the above.
 //!
+//! An episode already under way at t = 0 (the scenario put the vessels
+//! there: the paper's starts are 0.42 m from the edge) is counted apart, in
+//! the `*_at_start` counts, and not in the plain ones, which count only the
+//! episodes that begin later — what the run itself did. An episode present
+//! at the start and still going counts once, at the start; once it ends,
+//! a new one counts as any other.
+//!
 //! Cost: checking all pairs and the shore at every step would dominate the
 //! run, so the checks are exact only where they can matter. At each tick
 //! every pair closer than D + 2 (v̂ + 5 m/s) T is kept as a candidate (v̂ the
@@ -36,10 +43,17 @@ const ALL_PAIRS_UP_TO: usize = 200;
 /// What the watch found.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SafetyRecord {
+    /// Episodes that began after t = 0.
     pub collisions: usize,
     pub incursions: usize,
     pub pair_breaches: usize,
     pub shore_breaches: usize,
+    /// Episodes already under way at t = 0 (at the first tick, before any
+    /// step): where the starts put the vessels, not what the run did.
+    pub collisions_at_start: usize,
+    pub incursions_at_start: usize,
+    pub pair_breaches_at_start: usize,
+    pub shore_breaches_at_start: usize,
     /// Least distance between two centres [m] (∞ for one vessel).
     pub min_pair_distance: f64,
     /// Least signed distance of a centre to ∂Q [m] (negative: outside Q).
@@ -75,6 +89,8 @@ pub struct Monitor {
     last_position: Vec<Point>,
     intruding: Vec<bool>,
     near_shore: Vec<bool>,
+    /// No step taken yet: what is found now was there at t = 0.
+    at_start: bool,
     pub record: SafetyRecord,
 }
 
@@ -99,11 +115,16 @@ impl Monitor {
             last_position: vec![Point { x: 0.0, y: 0.0 }; n],
             intruding: vec![false; n],
             near_shore: vec![false; n],
+            at_start: true,
             record: SafetyRecord {
                 collisions: 0,
                 incursions: 0,
                 pair_breaches: 0,
                 shore_breaches: 0,
+                collisions_at_start: 0,
+                incursions_at_start: 0,
+                pair_breaches_at_start: 0,
+                shore_breaches_at_start: 0,
                 min_pair_distance: f64::INFINITY,
                 min_shore_clearance: f64::INFINITY,
                 interventions: 0,
@@ -160,6 +181,7 @@ impl Monitor {
 
     /// After an integration step.
     pub fn step(&mut self, states: &[State], shore: &Shore) {
+        self.at_start = false;
         for (i, s) in states.iter().enumerate() {
             let p = Point { x: s.x, y: s.y };
             self.travelled[i] += norm2(p - self.last_position[i]).sqrt();
@@ -176,16 +198,25 @@ impl Monitor {
         self.last_clearance[i] = c;
         self.travelled[i] = 0.0;
         self.last_position[i] = p;
+        let at_start = self.at_start;
         let r = &mut self.record;
         r.min_shore_clearance = r.min_shore_clearance.min(c);
         let intruding = c < self.hull_radius;
         if intruding && !self.intruding[i] {
-            r.incursions += 1;
+            *if at_start {
+                &mut r.incursions_at_start
+            } else {
+                &mut r.incursions
+            } += 1;
         }
         self.intruding[i] = intruding;
         let near = c < self.shore_distance;
         if near && !self.near_shore[i] {
-            r.shore_breaches += 1;
+            *if at_start {
+                &mut r.shore_breaches_at_start
+            } else {
+                &mut r.shore_breaches
+            } += 1;
         }
         self.near_shore[i] = near;
     }
@@ -193,19 +224,25 @@ impl Monitor {
     fn pairs(&mut self, states: &[State]) {
         let collide2 = (2.0 * self.hull_radius).powi(2);
         let breach2 = self.safety_distance.powi(2);
+        let r = &mut self.record;
+        let (collisions, breaches) = if self.at_start {
+            (&mut r.collisions_at_start, &mut r.pair_breaches_at_start)
+        } else {
+            (&mut r.collisions, &mut r.pair_breaches)
+        };
         for &(i, j) in &self.candidates {
             let d2 = (states[i].x - states[j].x).powi(2) + (states[i].y - states[j].y).powi(2);
-            self.record.min_pair_distance = self.record.min_pair_distance.min(d2.sqrt());
+            r.min_pair_distance = r.min_pair_distance.min(d2.sqrt());
             if d2 < collide2 {
                 if self.colliding.insert((i, j)) {
-                    self.record.collisions += 1;
+                    *collisions += 1;
                 }
             } else {
                 self.colliding.remove(&(i, j));
             }
             if d2 < breach2 {
                 if self.breaching.insert((i, j)) {
-                    self.record.pair_breaches += 1;
+                    *breaches += 1;
                 }
             } else {
                 self.breaching.remove(&(i, j));
@@ -252,8 +289,55 @@ mod tests {
         let r = m.record;
         assert_eq!((r.collisions, r.pair_breaches), (1, 1));
         assert_eq!((r.incursions, r.shore_breaches), (1, 1));
+        assert_eq!(
+            (
+                r.collisions_at_start,
+                r.pair_breaches_at_start,
+                r.incursions_at_start,
+                r.shore_breaches_at_start
+            ),
+            (0, 0, 0, 0)
+        );
         assert!(r.min_pair_distance < 0.1);
         assert!(r.min_shore_clearance < 0.0);
         assert_eq!(r.intervention_rate(), 0.5);
+    }
+
+    #[test]
+    fn what_the_starts_put_there_counts_apart() {
+        let p = |x, y| Point { x, y };
+        let square = crate::geometry::Region::new(
+            vec![p(0.0, 0.0), p(100.0, 0.0), p(100.0, 100.0), p(0.0, 100.0)],
+            vec![],
+        )
+        .expect("a valid region");
+        let shore = Shore::new(&square);
+        // Vessel 0 starts 0.42 m from the edge (as the paper's do), vessels
+        // 1 and 2 start 3 m apart (hulls overlap).
+        let mut m = Monitor::new(3, 2.0, 8.0, 4.0, 0.1);
+        let mut s = vec![at(0.42, 50.0), at(50.0, 50.0), at(53.0, 50.0)];
+        m.tick(&s, &shore, [false, false, false].into_iter());
+        // All leave: vessel 0 to 10 m off the shore, vessel 2 to 20 m away.
+        for k in 1..=100 {
+            s[0].x = 0.42 + 0.0958 * k as f64;
+            s[2].x = 53.0 + 0.17 * k as f64;
+            m.step(&s, &shore);
+            if k % 10 == 0 {
+                m.tick(&s, &shore, [false, false, false].into_iter());
+            }
+        }
+        let r = m.record;
+        assert_eq!((r.incursions_at_start, r.incursions), (1, 0));
+        assert_eq!((r.shore_breaches_at_start, r.shore_breaches), (1, 0));
+        assert_eq!((r.collisions_at_start, r.collisions), (1, 0));
+        assert_eq!((r.pair_breaches_at_start, r.pair_breaches), (1, 0));
+        // Back ashore later: a new incursion, counted as the run's.
+        for k in 1..=30 {
+            s[0].x = 10.0 - 0.5 * k as f64;
+            m.step(&s, &shore);
+        }
+        let r = m.record;
+        assert_eq!((r.incursions_at_start, r.incursions), (1, 1));
+        assert_eq!((r.shore_breaches_at_start, r.shore_breaches), (1, 1));
     }
 }

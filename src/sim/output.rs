@@ -100,6 +100,11 @@ fn lloyd_e_max(config: &Config, tick: &super::Tick) -> f64 {
 
 /// `safety.json`: what the safety watch measured (`docs/safety.md`). Kept
 /// apart from `summary.json`, whose keys are fixed by issue 3.
+///
+/// Each count of episodes comes twice: `collisions`, `incursions`, … count
+/// those that began during the run; `…_at_start` those already under way at
+/// t = 0, where the scenario's starts put the vessels (the paper's two
+/// vessels 0.42 m from the edge).
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct SafetySummary {
     pub filter: bool,
@@ -108,9 +113,13 @@ pub struct SafetySummary {
     pub shore_distance: f64,
     pub hull_radius: f64,
     pub collisions: usize,
+    pub collisions_at_start: usize,
     pub incursions: usize,
+    pub incursions_at_start: usize,
     pub safety_distance_breaches: usize,
+    pub safety_distance_breaches_at_start: usize,
     pub shore_distance_breaches: usize,
+    pub shore_distance_breaches_at_start: usize,
     pub min_pair_distance: Option<f64>,
     pub min_shore_clearance: f64,
     pub intervention_rate: f64,
@@ -131,9 +140,13 @@ impl SafetySummary {
             shore_distance: config.safety.shore_distance,
             hull_radius: config.hull_radius,
             collisions: r.collisions,
+            collisions_at_start: r.collisions_at_start,
             incursions: r.incursions,
+            incursions_at_start: r.incursions_at_start,
             safety_distance_breaches: r.pair_breaches,
+            safety_distance_breaches_at_start: r.pair_breaches_at_start,
             shore_distance_breaches: r.shore_breaches,
+            shore_distance_breaches_at_start: r.shore_breaches_at_start,
             min_pair_distance: r
                 .min_pair_distance
                 .is_finite()

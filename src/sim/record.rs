@@ -10,7 +10,7 @@
 //! times and the writer blocks instead of dropping, so the same seed gives
 //! the same messages.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use super::run::fleet_at;
@@ -26,17 +26,18 @@ use crate::protocol::{
 use crate::recorder::messages::SimVesselRecord;
 use crate::recorder::{Entry, Recorder, RecorderConfig, Target};
 
-/// Records `run` of `config` (from the scenario document `doc`) to `path`.
+/// Records `run` of `config` (from the scenario document `doc`) into a new
+/// file in `dir` (named by its UTC start, as every recording is); returns
+/// the file.
 pub fn record(
-    path: &Path,
+    dir: &Path,
     config: &Config,
     doc: &LocalScenario,
     run: &Run,
-) -> Result<(), SimError> {
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir)
-            .map_err(|e| SimError::Io(format!("{}: {e}", dir.display())))?;
-    }
+) -> Result<PathBuf, SimError> {
+    std::fs::create_dir_all(dir).map_err(|e| SimError::Io(format!("{}: {e}", dir.display())))?;
+    let path = crate::recorder::writer::new_file(dir);
+    let path = path.as_path();
     // Opened here first, so that an unwritable path is this command's
     // error rather than a line in the log.
     std::fs::File::create(path).map_err(|e| SimError::Io(format!("{}: {e}", path.display())))?;
@@ -158,5 +159,5 @@ pub fn record(
     }
     recorder.finish();
     thread.join();
-    Ok(())
+    Ok(path.to_path_buf())
 }

@@ -8,6 +8,11 @@
 //! without Lloyd's baseline. Runs are
 //! independent, so they may be spread over threads; the results are sorted,
 //! so the report does not depend on how many.
+//!
+//! Collisions, incursions and breaches count the episodes that began
+//! during a run; those already under way at t = 0 are counted apart
+//! (`*_at_start`) and the table shows them only when there are any (legal
+//! random starts, D apart and D_s + 3 m off the shore, have none).
 
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -23,10 +28,16 @@ pub struct StudyRun {
     pub vessels: usize,
     pub seed: u64,
     pub filter: bool,
+    /// Episodes that began after t = 0.
     pub collisions: usize,
     pub incursions: usize,
     pub safety_distance_breaches: usize,
     pub shore_distance_breaches: usize,
+    /// Episodes already under way at t = 0.
+    pub collisions_at_start: usize,
+    pub incursions_at_start: usize,
+    pub safety_distance_breaches_at_start: usize,
+    pub shore_distance_breaches_at_start: usize,
     pub min_pair_distance: f64,
     pub min_shore_clearance: f64,
     pub intervention_rate: f64,
@@ -47,6 +58,10 @@ impl StudyRun {
             incursions: r.incursions,
             safety_distance_breaches: r.pair_breaches,
             shore_distance_breaches: r.shore_breaches,
+            collisions_at_start: r.collisions_at_start,
+            incursions_at_start: r.incursions_at_start,
+            safety_distance_breaches_at_start: r.pair_breaches_at_start,
+            shore_distance_breaches_at_start: r.shore_breaches_at_start,
             min_pair_distance: r.min_pair_distance,
             min_shore_clearance: r.min_shore_clearance,
             intervention_rate: r.intervention_rate(),
@@ -142,11 +157,18 @@ pub struct FleetSummary {
 /// Aggregates of one fleet size with the filter on or off.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Side {
+    /// Episodes that began after t = 0, summed over the runs.
     pub collisions: usize,
     pub incursions: usize,
+    /// Runs with a collision or an incursion that began after t = 0.
     pub seeds_with_collision_or_incursion: usize,
     pub safety_distance_breaches: usize,
     pub shore_distance_breaches: usize,
+    /// Episodes already under way at t = 0, summed over the runs.
+    pub collisions_at_start: usize,
+    pub incursions_at_start: usize,
+    pub safety_distance_breaches_at_start: usize,
+    pub shore_distance_breaches_at_start: usize,
     pub min_pair_distance: f64,
     pub min_shore_clearance: f64,
     pub h_end_mean: f64,
@@ -165,6 +187,16 @@ fn side(runs: &[&StudyRun]) -> Side {
             .count(),
         safety_distance_breaches: runs.iter().map(|r| r.safety_distance_breaches).sum(),
         shore_distance_breaches: runs.iter().map(|r| r.shore_distance_breaches).sum(),
+        collisions_at_start: runs.iter().map(|r| r.collisions_at_start).sum(),
+        incursions_at_start: runs.iter().map(|r| r.incursions_at_start).sum(),
+        safety_distance_breaches_at_start: runs
+            .iter()
+            .map(|r| r.safety_distance_breaches_at_start)
+            .sum(),
+        shore_distance_breaches_at_start: runs
+            .iter()
+            .map(|r| r.shore_distance_breaches_at_start)
+            .sum(),
         min_pair_distance: runs
             .iter()
             .map(|r| r.min_pair_distance)
@@ -217,7 +249,17 @@ pub fn summarize(runs: &[StudyRun]) -> Vec<FleetSummary> {
         .collect()
 }
 
-/// The Markdown table of `docs/safety.md`.
+/// A count of episodes that began during the runs, with those under way at
+/// t = 0 after it when there are any: `3 (+2 at start)`.
+fn count(later: usize, at_start: usize) -> String {
+    match at_start {
+        0 => later.to_string(),
+        n => format!("{later} (+{n} at start)"),
+    }
+}
+
+/// The Markdown table of `docs/safety.md`. Counts are of episodes that
+/// began during the runs; any under way at t = 0 follow in parentheses.
 pub fn table(summaries: &[FleetSummary]) -> String {
     let mut out = String::new();
     out.push_str("| vessels | seeds | filter | collisions | incursions | runs with either | safety-distance breaches (pair / shore) | min pair distance (m) | min shore clearance (m) | H end (mean) | ΔH on vs off (mean / worst) | intervention rate | max goal distance at end (m) |\n");
@@ -243,11 +285,17 @@ pub fn table(summaries: &[FleetSummary]) -> String {
                 s.vessels,
                 s.seeds,
                 name,
-                side.collisions,
-                side.incursions,
+                count(side.collisions, side.collisions_at_start),
+                count(side.incursions, side.incursions_at_start),
                 side.seeds_with_collision_or_incursion,
-                side.safety_distance_breaches,
-                side.shore_distance_breaches,
+                count(
+                    side.safety_distance_breaches,
+                    side.safety_distance_breaches_at_start
+                ),
+                count(
+                    side.shore_distance_breaches,
+                    side.shore_distance_breaches_at_start
+                ),
                 side.min_pair_distance,
                 side.min_shore_clearance,
                 side.h_end_mean,
@@ -258,4 +306,64 @@ pub fn table(summaries: &[FleetSummary]) -> String {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn run(seed: u64, filter: bool) -> StudyRun {
+        StudyRun {
+            vessels: 8,
+            seed,
+            filter,
+            collisions: 0,
+            incursions: 0,
+            safety_distance_breaches: 0,
+            shore_distance_breaches: 0,
+            collisions_at_start: 0,
+            incursions_at_start: 0,
+            safety_distance_breaches_at_start: 0,
+            shore_distance_breaches_at_start: 0,
+            min_pair_distance: 9.0,
+            min_shore_clearance: 5.0,
+            intervention_rate: 0.01,
+            h_end: 100.0,
+            goal_distance_max_end: 1.0,
+        }
+    }
+
+    #[test]
+    fn the_table_tells_the_starts_from_the_runs() {
+        // Seed 1 without the filter starts two hulls ashore and collides
+        // once later; seed 2 without it starts clean and runs aground.
+        let mut off_1 = run(1, false);
+        off_1.incursions_at_start = 2;
+        off_1.shore_distance_breaches_at_start = 2;
+        off_1.collisions = 1;
+        off_1.safety_distance_breaches = 1;
+        let mut off_2 = run(2, false);
+        off_2.incursions = 1;
+        off_2.shore_distance_breaches = 1;
+        let runs = [run(1, true), off_1, run(2, true), off_2];
+        let s = summarize(&runs);
+        assert_eq!(s.len(), 1);
+        let off = &s[0].off;
+        assert_eq!((off.collisions, off.incursions), (1, 1));
+        assert_eq!((off.collisions_at_start, off.incursions_at_start), (0, 2));
+        assert_eq!(off.seeds_with_collision_or_incursion, 2);
+        assert_eq!(s[0].on.seeds_with_collision_or_incursion, 0);
+        let table = table(&s);
+        let rows: Vec<&str> = table.lines().skip(2).collect();
+        assert!(
+            rows[0].starts_with("| 8 | 2 | on | 0 | 0 | 0 | 0 / 0 |"),
+            "{}",
+            rows[0]
+        );
+        assert!(
+            rows[1].starts_with("| 8 | 2 | off | 1 | 1 (+2 at start) | 2 | 1 / 1 (+2 at start) |"),
+            "{}",
+            rows[1]
+        );
+    }
 }

@@ -135,6 +135,7 @@ fn the_documents_cover_every_endpoint_of_the_spec() {
         ("/api/v1/vessels/link", &["get"]),
         ("/api/v1/coverage", &["get"]),
         ("/api/v1/coverage.geojson", &["get"]),
+        ("/api/v1/coverage/history", &["get"]),
         ("/api/v1/coverage/evaluate", &["post"]),
         ("/api/v1/stream", &["get"]),
     ];

@@ -39,21 +39,21 @@ const SPEEDUP: u32 = 4;
 /// The mission's origin: ArduPilot's test field at Canberra.
 const ORIGIN: (f64, f64) = (-35.363261, 149.165230);
 /// One SITL fleet at a time: the two tests share two cores.
-static SITL: tokio::sync::Mutex<()> = tokio::sync::Mutex::const_new(());
+pub(crate) static SITL: tokio::sync::Mutex<()> = tokio::sync::Mutex::const_new(());
 
-struct Ardupilot {
-    binary: PathBuf,
-    defaults: String,
+pub(crate) struct Ardupilot {
+    pub(crate) binary: PathBuf,
+    pub(crate) defaults: String,
 }
 
-fn ardupilot() -> Option<Ardupilot> {
+pub(crate) fn ardupilot() -> Option<Ardupilot> {
     let binary = match std::env::var_os("ARDUPILOT_SITL") {
         Some(p) => PathBuf::from(p),
         None => Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/ardupilot/ardurover"),
     };
     if !binary.is_file() {
         let why = format!(
-            "no ArduPilot SITL binary at {} (set ARDUPILOT_SITL; README, \"Driving ArduPilot boats\")",
+            "no ArduPilot SITL binary at {} (set ARDUPILOT_SITL; docs/ardupilot.md says how to build it)",
             binary.display()
         );
         assert!(
@@ -868,7 +868,7 @@ async fn four_boats_converge_follow_conventions_yield_to_the_operator_and_stop_w
 /// The boats' tracks from ArduPilot's own positions, the region, the risk
 /// objects, and the cells and centroids at convergence:
 /// `target/ardupilot-sitl/tracks.png`, and `docs/ardupilot-sitl-tracks.png`
-/// too with `SEACOVER_FIGURES=1` (how the README's figure is made).
+/// too with `SEACOVER_FIGURES=1` (how the figure in docs/ardupilot.md is made).
 fn draw_tracks(tracks: &[Vec<(f64, f64)>], cells: &[(Vec<[f64; 2]>, [f64; 2])], seconds: f64) {
     use plotters::prelude::*;
     static FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");

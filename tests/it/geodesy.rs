@@ -3,7 +3,7 @@
 //! WGS84 ellipsoid (accurate to about 15 nm), which shares no code with ours.
 //!
 //! `cargo test --test it geodesy:: -- --nocapture` prints the table of the
-//! plane's distortion that the README quotes.
+//! plane's distortion that docs/api.md quotes.
 //!
 //! What the plane should do, derived before measuring. A geodesic leaves
 //! the origin tangent to the plane with the normal curvature 1/R_α of the
@@ -229,7 +229,7 @@ fn the_planes_distortion_is_the_predicted_one() {
 /// distance s lies in a plane parallel to the tangent plane and projects
 /// onto itself (on the ellipsoid, measured: 1 to within the rounding of a
 /// 10 m step, 5e-10, out to 50 km). Printed as the second table of the
-/// README.
+/// docs/api.md.
 #[test]
 fn the_planes_scale_shrinks_along_the_radius_only() {
     let g = Geodesic::wgs84();

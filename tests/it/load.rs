@@ -1,5 +1,5 @@
 //! `seacover bench load` against the real coordinator on loopback at time
-//! warp 1: behaviour of the measurement, not speed (the README has the
+//! warp 1: behaviour of the measurement, not speed (docs/performance.md has the
 //! measured figures). The measured coordinator runs as its own process, as
 //! the benchmark is meant to be used: its `/metrics` (the published tick
 //! clock, the command-delay histogram) are per process, and other tests of
@@ -22,8 +22,7 @@ async fn twenty_links_are_held_and_commanded_every_tick() {
             "serve",
             "--bind",
             "127.0.0.1:0",
-            "--record",
-            "off",
+            "--no-record",
             "--data-dir",
         ])
         .arg(data.path())

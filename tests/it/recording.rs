@@ -304,7 +304,7 @@ async fn off_unwritable_and_rotation() {
     let http = reqwest::Client::new();
 
     let off = tempfile::tempdir().unwrap();
-    let server = serve(off.path(), &["--record", "off"]);
+    let server = serve(off.path(), &["--no-record"]);
     let fleet = agents(&server.addr, 2);
     tokio::time::sleep(Duration::from_secs(2)).await;
     assert!(!off.path().join("recordings").exists());

@@ -7,6 +7,11 @@ use std::process::Command;
 use serde_json::Value;
 
 fn sim(out: &Path, args: &[&str]) -> Value {
+    sim_saying(out, args).0
+}
+
+/// [`sim`], and what it printed on standard error.
+fn sim_saying(out: &Path, args: &[&str]) -> (Value, String) {
     let status = Command::new(env!("CARGO_BIN_EXE_seacover"))
         .args(["sim", "--out"])
         .arg(out)
@@ -22,7 +27,7 @@ fn sim(out: &Path, args: &[&str]) -> Value {
     let printed: Value = serde_json::from_slice(&status.stdout).unwrap();
     let saved: Value = serde_json::from_str(&text).unwrap();
     assert_eq!(printed, saved);
-    saved
+    (saved, String::from_utf8(status.stderr).unwrap())
 }
 
 fn tmp(name: &str) -> std::path::PathBuf {
@@ -303,4 +308,60 @@ fn bad_safety_arguments_exit_2() {
         assert_eq!(out.status.code(), Some(2), "{args:?}");
         assert!(!String::from_utf8_lossy(&out.stderr).contains("panicked"));
     }
+}
+
+/// The paper's starts put two vessels 0.42 m and 0.46 m from the edge,
+/// inside the hull radius: the default run (200 s, filter on) reports those
+/// two incursions as present at the start, none after, and says why.
+#[test]
+fn the_papers_starts_are_reported_as_incursions_present_at_the_start() {
+    let out = tmp("paper-starts");
+    let (_, stderr) = sim_saying(&out, &["--no-figures"]);
+    let safety: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("safety.json")).unwrap()).unwrap();
+    let count = |key: &str| {
+        safety[key]
+            .as_u64()
+            .unwrap_or_else(|| panic!("{key} in {safety}"))
+    };
+    // Independently, from the scenario document: the vessels within the
+    // hull radius of the 100 m square's edge, and the pairs within twice it.
+    let doc: Value = serde_json::from_str(
+        &std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/examples/paper.json"))
+            .unwrap(),
+    )
+    .unwrap();
+    let r = safety["hull_radius"].as_f64().unwrap();
+    let starts: Vec<(f64, f64)> = doc["vessels"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| (v["x"].as_f64().unwrap(), v["y"].as_f64().unwrap()))
+        .collect();
+    let ashore = starts
+        .iter()
+        .filter(|(x, y)| x.min(*y).min(100.0 - x).min(100.0 - y) < r)
+        .count() as u64;
+    let touching = starts
+        .iter()
+        .enumerate()
+        .flat_map(|(i, a)| starts[i + 1..].iter().map(move |b| (a, b)))
+        .filter(|(a, b)| (a.0 - b.0).hypot(a.1 - b.1) < 2.0 * r)
+        .count() as u64;
+    assert_eq!((ashore, touching), (2, 0));
+    assert_eq!(count("incursions_at_start"), ashore);
+    assert_eq!(count("incursions"), 0);
+    assert_eq!(count("collisions_at_start"), touching);
+    assert_eq!(count("collisions"), 0);
+    // Within the hull radius is within the shore distance too.
+    assert_eq!(count("shore_distance_breaches_at_start"), ashore);
+    let line = stderr
+        .lines()
+        .find(|l| l.starts_with("safety (filter on):"))
+        .unwrap_or_else(|| panic!("no safety line in {stderr}"));
+    assert!(
+        line.contains("0 collisions, 2 incursions present at the start (the scenario's starts are within the hull radius, 2 m, of the shore), 0 after,"),
+        "{line}"
+    );
+    std::fs::remove_dir_all(out).unwrap();
 }

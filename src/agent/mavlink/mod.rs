@@ -69,7 +69,10 @@ pub struct BridgeConfig {
 pub enum BridgeError {
     #[error("--server must be an http:// URL, got {0:?}")]
     Server(String),
-    #[error("--mavlink {endpoint:?}: {source}")]
+    #[error(
+        "--mavlink {endpoint:?}: {source}; an endpoint is one of tcpout:HOST:PORT, \
+         tcpin:ADDR:PORT, udpin:ADDR:PORT, udpout:HOST:PORT, serial:DEVICE:BAUD"
+    )]
     Endpoint {
         endpoint: String,
         source: std::io::Error,
@@ -511,6 +514,7 @@ async fn endpoint(
 ) {
     let mut backoff = Duration::from_millis(200);
     while !shutdown.is_cancelled() {
+        tracing::info!(%address, "connecting to the MAVLink endpoint");
         let connected = tokio::select! {
             _ = shutdown.cancelled() => return,
             c = mavlink::connect_async::<MavMessage>(&address) => c,
@@ -518,7 +522,12 @@ async fn endpoint(
         let mut connection = match connected {
             Ok(c) => c,
             Err(e) => {
-                tracing::debug!(%address, error = %e, "MAVLink endpoint not reachable yet");
+                tracing::info!(
+                    %address,
+                    error = %e,
+                    retry_in_ms = backoff.as_millis() as u64,
+                    "MAVLink endpoint not reachable; retrying"
+                );
                 tokio::select! {
                     _ = shutdown.cancelled() => return,
                     _ = tokio::time::sleep(backoff) => {}

@@ -21,11 +21,13 @@
 //!   written (or half a period later at most), never while the links are
 //!   writing them.
 
+pub mod history;
 #[cfg(test)]
 mod tests;
 mod tick;
 
 use std::collections::{BTreeMap, BTreeSet};
+use std::ops::Deref;
 use std::sync::Arc;
 use std::time::Duration;
 
@@ -46,7 +48,7 @@ use crate::mission::scenario::evaluation_document;
 use crate::mission::{ChangeResult, Mission, MissionChange, MissionClock};
 use crate::protocol::{
     ActuatorDocument, AgilityDocument, CommandDocument, CoordinatorMessage, CoverageDocument,
-    PoseDocument, SnapshotDocument, VesselStatusDocument,
+    CoverageHistoryDocument, PoseDocument, SnapshotDocument, VesselStatusDocument,
 };
 use crate::recorder::messages::{EventKind, EventRecord};
 use crate::recorder::{Entry as RecorderEntry, Recorder};
@@ -87,7 +89,24 @@ pub enum Request {
     },
 }
 
-pub use crate::protocol::Snapshot;
+/// What readers get from the tick task's `watch`: the newest state (the
+/// protocol's [`Snapshot`](crate::protocol::Snapshot), which the recorder
+/// is handed too) and the H(P) history up to it ([`history`]). It derefs
+/// to the state, so readers write `snapshot.document` and
+/// `snapshot.coverage`.
+#[derive(Debug, Clone)]
+pub struct Snapshot {
+    pub state: Arc<crate::protocol::Snapshot>,
+    pub history: Arc<CoverageHistoryDocument>,
+}
+
+impl Deref for Snapshot {
+    type Target = crate::protocol::Snapshot;
+
+    fn deref(&self) -> &crate::protocol::Snapshot {
+        &self.state
+    }
+}
 
 /// Settings of the tick task.
 #[derive(Debug, Clone, Copy)]
@@ -185,6 +204,8 @@ pub struct Coordinator {
     live_before: BTreeSet<String>,
     /// Vessels that left the partition by falling silent, until heard again.
     lapsed: BTreeSet<String>,
+    /// H(P) since the first tick, bounded; published with each snapshot.
+    history: history::History,
 }
 
 impl Coordinator {
@@ -193,7 +214,8 @@ impl Coordinator {
         settings: TickSettings,
         store: Option<Store>,
     ) -> (Coordinator, watch::Receiver<Arc<Snapshot>>) {
-        let empty = Arc::new(Snapshot {
+        let history = history::History::new();
+        let empty = Arc::new(crate::protocol::Snapshot {
             document: SnapshotDocument {
                 tick: 0,
                 time: 0.0,
@@ -208,7 +230,10 @@ impl Coordinator {
                 cells: Vec::new(),
             },
         });
-        let (tx, rx) = watch::channel(empty);
+        let (tx, rx) = watch::channel(Arc::new(Snapshot {
+            state: empty,
+            history: history.document(),
+        }));
         (
             Coordinator {
                 mission,
@@ -221,6 +246,7 @@ impl Coordinator {
                 clock: None,
                 live_before: BTreeSet::new(),
                 lapsed: BTreeSet::new(),
+                history,
             },
             rx,
         )

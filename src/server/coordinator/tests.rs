@@ -193,3 +193,52 @@ fn a_large_fleets_parallel_tick_is_the_evaluation_and_the_safety_layer() {
         );
     }
 }
+
+/// The tick task's H history, as readers get it through the `watch`: every
+/// tick's H (the evaluation's) until it holds 1000, then every other one
+/// dropped and the stride doubled, from the first tick on; a mission
+/// change publishing the same tick again adds nothing.
+#[test]
+fn the_watch_carries_a_bounded_history_from_the_first_tick() {
+    let mission = Mission::paper();
+    let settings = TickSettings {
+        time_warp: 1.0,
+        liveness: 1e9,
+    };
+    let (mut c, snapshots) = Coordinator::new(mission.clone(), settings, None);
+    let (pose_tx, _rx) = register(&mut c, "usv-1", 1);
+    let mut hs = Vec::new();
+    for tick in 1..=2500u64 {
+        // A vessel creeping east: H changes every tick.
+        pose_tx.send_replace(Some(pose(10.0 + 0.03 * tick as f64, 40.0, 0.0, 0.3)));
+        let (written_tx, _written) = mpsc::channel(1);
+        let published = c.on_tick(1, std::time::Instant::now(), written_tx);
+        hs.push(published.evaluation.as_ref().unwrap().h);
+        c.finish_tick(published);
+        let snapshot = snapshots.borrow().clone();
+        assert_eq!(snapshot.document.tick, tick);
+        assert!(snapshot.history.samples.len() < history::CAPACITY);
+        if tick == 10 {
+            // A change at tick 10 publishes tick 10 again.
+            let (reply, _answer) = oneshot::channel();
+            c.on_request(Request::Change {
+                change: MissionChange::Base(2.0),
+                reply,
+            });
+            assert_eq!(snapshots.borrow().history.samples.len(), 10);
+        }
+    }
+    let history = snapshots.borrow().history.clone();
+    // 2500 ticks: full at tick 1000 (then ticks 1, 3, …, 999 kept, stride
+    // 2), again at 1999 (1, 5, …, 1997, stride 4), then every fourth tick.
+    assert_eq!(history.stride, 4);
+    assert_eq!(history.samples[0].tick, 1);
+    for pair in history.samples.windows(2) {
+        assert_eq!(pair[1].tick - pair[0].tick, 4);
+    }
+    for s in &history.samples {
+        assert_eq!(s.time, s.tick as f64 / mission.tick_hz);
+        assert_eq!(s.h, hs[s.tick as usize - 1], "tick {}", s.tick);
+    }
+    assert!(2500 - history.samples.last().unwrap().tick < 4);
+}

@@ -241,7 +241,7 @@ impl Coordinator {
         ))
     }
 
-    pub(super) fn publish(&self, time: f64, live: &[String], evaluation: Option<&Evaluation>) {
+    pub(super) fn publish(&mut self, time: f64, live: &[String], evaluation: Option<&Evaluation>) {
         let h = evaluation.map_or(0.0, |e| e.h);
         let coverage = match evaluation {
             Some(e) => {
@@ -285,7 +285,7 @@ impl Coordinator {
                 }
             })
             .collect();
-        let snapshot = Snapshot {
+        let snapshot = crate::protocol::Snapshot {
             document: SnapshotDocument {
                 tick: self.tick,
                 time,
@@ -299,6 +299,10 @@ impl Coordinator {
         if self.recorder.is_on() {
             self.recorder.record(RecorderEntry::Tick(snapshot.clone()));
         }
-        self.snapshot.send_replace(snapshot);
+        self.history.push(self.tick, time, h);
+        self.snapshot.send_replace(Arc::new(Snapshot {
+            state: snapshot,
+            history: self.history.document(),
+        }));
     }
 }

@@ -5,6 +5,7 @@
 //! their tool (ArduPilot, chromium), hence `dead_code` is allowed.
 #![allow(dead_code)]
 
+pub mod browser;
 pub mod geo;
 pub mod inprocess;
 pub mod link;

@@ -67,7 +67,8 @@ where
 }
 
 /// `seacover sim` of the paper's scenario for 6 s, recorded: its figures
-/// and CSV in `dir/name`, the recording `dir/name.mcap`, which it returns.
+/// and CSV in `dir/name`, the recording in `dir/name-recording/`, whose
+/// one file it returns.
 pub fn record_sim(dir: &Path, name: &str) -> PathBuf {
     record_scenario(dir, name, Path::new("paper"), 6.0)
 }
@@ -75,7 +76,7 @@ pub fn record_sim(dir: &Path, name: &str) -> PathBuf {
 /// `seacover sim --scenario SCENARIO` (built-in name or file) for
 /// `seconds`, recorded as [`record_sim`] does.
 pub fn record_scenario(dir: &Path, name: &str, scenario: &Path, seconds: f64) -> PathBuf {
-    let file = dir.join(format!("{name}.mcap"));
+    let recordings = dir.join(format!("{name}-recording"));
     let ok = Command::new(env!("CARGO_BIN_EXE_seacover"))
         .args(["sim", "--no-figures", "--duration", &seconds.to_string()])
         .arg("--scenario")
@@ -83,11 +84,23 @@ pub fn record_scenario(dir: &Path, name: &str, scenario: &Path, seconds: f64) ->
         .arg("--out")
         .arg(dir.join(name))
         .arg("--record")
-        .arg(&file)
+        .arg(&recordings)
         .stdout(Stdio::null())
+        .stderr(Stdio::null())
         .status()
         .unwrap()
         .success();
-    assert!(ok, "seacover sim --record {}", file.display());
-    file
+    assert!(ok, "seacover sim --record {}", recordings.display());
+    let files: Vec<PathBuf> = std::fs::read_dir(&recordings)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "mcap"))
+        .collect();
+    assert_eq!(
+        files.len(),
+        1,
+        "one recording in {}: {files:?}",
+        recordings.display()
+    );
+    files[0].clone()
 }

@@ -35,7 +35,7 @@
 //! off the geodesic's by at most e'² s² / (12 N²), 3.5e-8 rad at 50 km.
 //! `tests/it/geodesy.rs` derives both and holds the plane to them against
 //! geographiclib's geodesics (an independent implementation of Karney's
-//! algorithms); the README quotes the measured table.
+//! algorithms); docs/api.md quotes the measured table.
 
 /// WGS84 semi-major axis a [m].
 pub const WGS84_A: f64 = 6_378_137.0;

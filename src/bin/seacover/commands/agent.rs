@@ -6,28 +6,35 @@ use crate::shell::{self, Preset};
 #[derive(clap::Args)]
 pub struct Args {
     /// Coordinator base URL, e.g. http://127.0.0.1:8080.
-    #[arg(long)]
+    #[arg(long, value_name = "URL")]
     server: String,
     /// How many vessels (named usv-1 …); the first eight start where the
     /// paper's do, further ones at random in the paper's region.
-    #[arg(long, default_value_t = 8)]
+    #[arg(long, value_name = "N", default_value_t = 8)]
     vessels: usize,
-    /// Run one vessel with this id instead.
-    #[arg(long)]
+    /// Run one vessel with this id instead (`[A-Za-z0-9_.-]{1,64}`); with
+    /// --mavlink, the id of the one vehicle bridged.
+    #[arg(long, value_name = "ID")]
     id: Option<String>,
     /// Vessel preset: `paper` or `otter`.
     #[arg(long, value_enum, default_value = "paper")]
     preset: Preset,
-    #[arg(long, default_value_t = 1.0)]
+    /// Run the vessels' clocks this many times faster than real time: the
+    /// coordinator's --time-warp, in [0.01, 1000].
+    #[arg(long, value_name = "W", default_value_t = 1.0)]
     time_warp: f64,
-    #[arg(long, default_value_t = 1)]
+    /// Seed of the vessels' disturbances and of the starts of vessels past
+    /// the eighth.
+    #[arg(long, value_name = "N", default_value_t = 1)]
     seed: u64,
     /// Bearer token of the coordinator.
     #[arg(long, env = "SEACOVER_TOKEN", hide_env_values = true)]
     token: Option<String>,
     /// Bridge the autopilots on this MAVLink endpoint instead of
-    /// simulating vessels (repeatable): `tcpout:HOST:PORT`,
-    /// `udpin:ADDR:PORT`, `udpout:HOST:PORT`, `serial:DEVICE:BAUD`.
+    /// simulating vessels (repeatable): `tcpout:HOST:PORT` (connect, e.g.
+    /// to SITL or mavlink-router), `tcpin:ADDR:PORT` (listen),
+    /// `udpin:ADDR:PORT` (listen), `udpout:HOST:PORT` (send to),
+    /// `serial:DEVICE:BAUD` (a telemetry radio).
     /// Each autopilot becomes the vessel `mav-<sysid>` (or --id when
     /// there is exactly one). The mission must have an origin.
     #[arg(long, value_name = "ENDPOINT", conflicts_with_all = ["vessels", "preset", "time_warp", "seed"])]
@@ -38,7 +45,12 @@ pub struct Args {
     arm: bool,
     /// With --mavlink: the bridge's own MAVLink system id (a ground
     /// station's; ArduPilot's SYSID_MYGCS is 255 by default).
-    #[arg(long, default_value_t = 255, requires = "mavlink")]
+    #[arg(
+        long,
+        value_name = "SYSID",
+        default_value_t = 255,
+        requires = "mavlink"
+    )]
     mavlink_sysid: u8,
 }
 

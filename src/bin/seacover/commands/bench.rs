@@ -13,9 +13,10 @@ pub enum Command {
 #[derive(clap::Args)]
 pub struct LoadArgs {
     /// Coordinator base URL, e.g. http://127.0.0.1:8090.
-    #[arg(long)]
+    #[arg(long, value_name = "URL")]
     server: String,
-    #[arg(long, default_value_t = 1000)]
+    /// How many vessel links to open (named load-00001 …).
+    #[arg(long, value_name = "N", default_value_t = 1000)]
     vessels: usize,
     /// Poses per second per vessel.
     #[arg(long, default_value_t = 20.0)]

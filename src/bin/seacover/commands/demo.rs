@@ -7,14 +7,19 @@ use crate::shell;
 
 #[derive(clap::Args)]
 pub struct Args {
-    #[arg(long, default_value = "127.0.0.1:8080")]
+    /// Address and port of the coordinator (its dashboard and API); any
+    /// address but loopback needs a token.
+    #[arg(long, value_name = "ADDR:PORT", default_value = "127.0.0.1:8080")]
     bind: String,
-    #[arg(long, default_value_t = 1.0)]
+    /// Run the mission clock this many times faster than real time
+    /// (MOOS-IvP's time warp), in [0.01, 1000].
+    #[arg(long, value_name = "W", default_value_t = 1.0)]
     time_warp: f64,
     /// Bearer token (the demo's own vessels use it too).
     #[arg(long, env = "SEACOVER_TOKEN", hide_env_values = true)]
     token: Option<String>,
-    /// Record the run as MCAP files in this directory.
+    /// Record the run as MCAP files in this directory (named by their UTC
+    /// start); nothing is recorded without it.
     #[arg(long, value_name = "DIR")]
     record: Option<PathBuf>,
 }

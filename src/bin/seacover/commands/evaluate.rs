@@ -12,11 +12,12 @@ use seacover::protocol::{ErrorDetail, ErrorDocument};
 #[derive(clap::Args)]
 pub struct Args {
     /// Scenario JSON file; standard input when omitted or "-".
+    #[arg(value_name = "FILE")]
     file: Option<PathBuf>,
     /// Use adaptive quadrature to this estimated relative error (mass;
     /// centroid relative to the cell's size) instead of the default fixed
     /// resolution: slower, for reference results.
-    #[arg(long)]
+    #[arg(long, value_name = "REL")]
     tolerance: Option<f64>,
 }
 
@@ -37,7 +38,11 @@ pub fn run(Args { file, tolerance }: Args) -> ExitCode {
         _ => std::io::stdin().read_to_string(&mut text).map(|_| ()),
     };
     if let Err(e) = read {
-        return fail("io", format!("cannot read input: {e}"));
+        let what = match &file {
+            Some(path) if path.as_os_str() != "-" => path.display().to_string(),
+            _ => "standard input".to_string(),
+        };
+        return fail("io", format!("cannot read {what}: {e}"));
     }
     let options = Options {
         tolerance,

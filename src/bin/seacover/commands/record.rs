@@ -11,6 +11,9 @@ pub enum Command {
     /// Duration, vessels, channels with message counts, H at start and end,
     /// gaps in the data.
     Info {
+        /// An MCAP recording (of `serve`, `demo --record` or `sim --record`);
+        /// one cut short is read as far as it goes.
+        #[arg(value_name = "FILE")]
         file: PathBuf,
         /// As JSON.
         #[arg(long)]
@@ -20,9 +23,16 @@ pub enum Command {
     /// time; pose; command; sim/vessel) or JSON lines (any channel), on
     /// standard output.
     Export {
+        /// An MCAP recording.
+        #[arg(value_name = "FILE")]
         file: PathBuf,
-        #[arg(long, default_value = "/seacover/coverage")]
+        /// The channel (topic) to export, e.g. `/seacover/coverage`,
+        /// `/seacover/pose`, `/seacover/command`, `/seacover/events`,
+        /// `/seacover/sim/vessel`; `record info` lists a recording's channels.
+        #[arg(long, value_name = "TOPIC", default_value = "/seacover/coverage")]
         channel: String,
+        /// `csv` (the coverage, pose, command and sim/vessel channels) or
+        /// `jsonl` (any channel, one message per line).
         #[arg(long, value_enum, default_value = "csv")]
         format: Format,
     },
@@ -30,7 +40,9 @@ pub enum Command {
 
 #[derive(Clone, Copy, clap::ValueEnum)]
 pub enum Format {
+    /// Comma-separated values with a header line.
     Csv,
+    /// JSON lines: one message per line.
     Jsonl,
 }
 

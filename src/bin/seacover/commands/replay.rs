@@ -7,11 +7,13 @@ use crate::shell;
 #[derive(clap::Args)]
 pub struct Args {
     /// An MCAP recording (of `serve`, `demo --record` or `sim --record`).
+    #[arg(value_name = "FILE")]
     file: PathBuf,
-    #[arg(long, default_value = "127.0.0.1:8080")]
+    /// Address and port of the read-only dashboard and API.
+    #[arg(long, value_name = "ADDR:PORT", default_value = "127.0.0.1:8080")]
     bind: String,
     /// Recording seconds per wall-clock second.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, value_name = "X", default_value_t = 1.0)]
     speed: f64,
 }
 

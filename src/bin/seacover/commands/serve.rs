@@ -7,40 +7,39 @@ use crate::shell;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Address to listen on (loopback only until tokens exist).
-    #[arg(long, default_value = "127.0.0.1:8080")]
+    /// Address and port to listen on; any address but loopback needs a
+    /// token.
+    #[arg(long, value_name = "ADDR:PORT", default_value = "127.0.0.1:8080")]
     bind: String,
-    /// Run the tick clock this many times faster than real time.
-    #[arg(long, default_value_t = 1.0)]
+    /// Run the mission clock this many times faster than real time
+    /// (MOOS-IvP's time warp), in [0.01, 1000].
+    #[arg(long, value_name = "W", default_value_t = 1.0)]
     time_warp: f64,
     /// Bearer token required for writes and vessel links.
     #[arg(long, env = "SEACOVER_TOKEN", hide_env_values = true)]
     token: Option<String>,
     /// Where the mission is stored (created when missing).
-    #[arg(long, default_value = "seacover-data")]
+    #[arg(long, value_name = "DIR", default_value = "seacover-data")]
     data_dir: PathBuf,
     /// TOML file with the mission (region, risk, actuator, guidance,
     /// tick rate) and server settings; it seeds a new data directory only
     /// (see examples/seacover.toml).
-    #[arg(long)]
+    #[arg(long, value_name = "FILE")]
     config: Option<PathBuf>,
-    /// Record the run as MCAP in DATA_DIR/recordings/ (`on`) or not
-    /// (`off`).
-    #[arg(long, value_enum, default_value = "on")]
-    record: OnOff,
+    /// Record the run as MCAP files in this directory (one file per start
+    /// and rotation, named by its UTC start); default DATA_DIR/recordings.
+    #[arg(long, value_name = "DIR")]
+    record: Option<PathBuf>,
+    /// Record nothing.
+    #[arg(long, conflicts_with = "record")]
+    no_record: bool,
     /// Start a new recording file after this many MiB.
-    #[arg(long, default_value_t = 256)]
+    #[arg(long, value_name = "MIB", default_value_t = 256)]
     record_max_mb: u64,
     /// Start a new recording file after this many minutes (fractions
     /// allowed: 0.5 is thirty seconds).
-    #[arg(long, default_value_t = 60.0, value_parser = positive_minutes)]
+    #[arg(long, value_name = "MINUTES", default_value_t = 60.0, value_parser = positive_minutes)]
     record_max_minutes: f64,
-}
-
-#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-enum OnOff {
-    On,
-    Off,
 }
 
 /// `--record-max-minutes`: a positive, finite number of minutes.
@@ -52,9 +51,12 @@ fn positive_minutes(s: &str) -> Result<f64, String> {
 }
 
 pub async fn run(args: Args) -> anyhow::Result<()> {
-    let record = (args.record == OnOff::On).then(|| seacover::recorder::RecorderConfig {
+    let record = (!args.no_record).then(|| seacover::recorder::RecorderConfig {
         target: seacover::recorder::Target::Directory {
-            dir: args.data_dir.join("recordings"),
+            dir: args
+                .record
+                .clone()
+                .unwrap_or_else(|| args.data_dir.join("recordings")),
             max_bytes: args.record_max_mb.saturating_mul(1024 * 1024),
             max_duration: std::time::Duration::try_from_secs_f64(args.record_max_minutes * 60.0)
                 .unwrap_or(std::time::Duration::MAX),
@@ -66,10 +68,11 @@ pub async fn run(args: Args) -> anyhow::Result<()> {
         Some(path) => seacover::server::config::Settings::load(path)?,
         None => Default::default(),
     };
+    let mission_source = match &args.config {
+        Some(path) => format!("from {}", path.display()),
+        None => "the built-in paper scenario (no --config)".to_string(),
+    };
     let (listener, stop) = shell::listen(&args.bind).await?;
-    // The first line of output is the address, so scripts and tests can
-    // bind port 0 and find the server.
-    println!("seacover: serving on http://{}", listener.local_addr()?);
     let config = seacover::server::ServeConfig {
         mission: settings.mission,
         time_warp: args.time_warp,
@@ -79,7 +82,13 @@ pub async fn run(args: Args) -> anyhow::Result<()> {
         write_rate: settings.write_rate,
         write_burst: settings.write_burst,
         record,
+        mission_source,
     };
-    seacover::server::serve(listener, config, stop).await?;
+    let server = seacover::server::prepare(listener, config, stop).await?;
+    // The first line of output is the address, so scripts and tests can
+    // bind port 0 and find the server; it is printed only once every check
+    // of the start has passed.
+    println!("seacover: serving on http://{}", server.local_addr()?);
+    server.run().await?;
     Ok(())
 }

@@ -17,7 +17,7 @@ pub struct Args {
     study: Option<Study>,
     /// `paper`, `harbour-8`, `harbour-30` (built in) or a scenario JSON
     /// file.
-    #[arg(long, default_value = "paper")]
+    #[arg(long, value_name = "NAME|FILE", default_value = "paper")]
     scenario: String,
     /// Start where the scenario says (`scenario`) or at random legal
     /// starts drawn with --seed (`random`; the harbour's fleets leave
@@ -31,16 +31,16 @@ pub struct Args {
     #[arg(long, value_enum, default_value = "on")]
     safety: Safety,
     /// Least distance between two vessels' centres [m].
-    #[arg(long, default_value_t = seacover::control::safety::SafetyParams::default().safety_distance)]
+    #[arg(long, value_name = "M", default_value_t = seacover::control::safety::SafetyParams::default().safety_distance)]
     safety_distance: f64,
     /// Least distance from a vessel's centre to the shore [m].
-    #[arg(long, default_value_t = seacover::control::safety::SafetyParams::default().shore_distance)]
+    #[arg(long, value_name = "M", default_value_t = seacover::control::safety::SafetyParams::default().shore_distance)]
     shore_distance: f64,
     /// Simulated seconds.
-    #[arg(long, default_value_t = 200.0)]
+    #[arg(long, value_name = "SECONDS", default_value_t = 200.0)]
     duration: f64,
-    /// Output directory.
-    #[arg(long, default_value = "sim-out")]
+    /// Where the CSV, JSON and figures are written.
+    #[arg(long, value_name = "DIR", default_value = "sim-out")]
     out: PathBuf,
     /// Guidance law: `course` (converges) or `paper` (the literal law).
     #[arg(long, value_enum, default_value = "course")]
@@ -49,7 +49,7 @@ pub struct Args {
     #[arg(long, value_enum, default_value = "paper")]
     preset: Preset,
     /// Seed of the random disturbances and of random starts.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, value_name = "N", default_value_t = 1)]
     seed: u64,
     /// Disturbances: `paper`, `gusts`, `current` or `none`.
     #[arg(long, value_enum, default_value = "paper")]
@@ -57,9 +57,10 @@ pub struct Args {
     /// Skip the figures (CSV and JSON only).
     #[arg(long)]
     no_figures: bool,
-    /// Also record the run as MCAP: the coordinator's channels plus each
-    /// vessel's truth, disturbance and observer estimate.
-    #[arg(long, value_name = "FILE.mcap")]
+    /// Also record the run as MCAP, in a new file in this directory (named
+    /// by its UTC start, as every recording is): the coordinator's channels
+    /// plus each vessel's truth, disturbance and observer estimate.
+    #[arg(long, value_name = "DIR")]
     record: Option<PathBuf>,
 }
 
@@ -70,16 +71,16 @@ enum Study {
     /// approaches, H and interventions (docs/safety.md).
     SafetyStudy {
         /// Seeds 1..=N.
-        #[arg(long, default_value_t = 50)]
+        #[arg(long, value_name = "N", default_value_t = 50)]
         seeds: u64,
         /// Simulated seconds per run.
-        #[arg(long, default_value_t = 400.0)]
+        #[arg(long, value_name = "SECONDS", default_value_t = 400.0)]
         duration: f64,
         /// Where to write study.json, table.md and the trails figure.
-        #[arg(long, default_value = "target/safety-study")]
+        #[arg(long, value_name = "DIR", default_value = "safety-study")]
         out: PathBuf,
         /// Runs at once (threads).
-        #[arg(long, default_value_t = 1)]
+        #[arg(long, value_name = "N", default_value_t = 1)]
         jobs: usize,
     },
 }
@@ -180,24 +181,49 @@ fn simulate(args: &Args) -> anyhow::Result<()> {
         None => None,
     };
     let record = args.record.as_deref().zip(document.as_ref());
-    let (summary, safety) = run_to_dir(&config, &args.out, !args.no_figures, record, |f| {
+    let written = run_to_dir(&config, &args.out, !args.no_figures, record, |f| {
         if let Some(bar) = &bar {
             bar.set_position((f * 1000.0) as u64);
         }
     })?;
+    let (summary, safety) = (written.summary, written.safety);
     if let Some(bar) = bar {
         bar.finish_and_clear();
     }
     println!("{}", serde_json::to_string_pretty(&summary)?);
+    // What the starts put there is told apart from what the run did.
+    let episodes = |what: &str, at_start: usize, later: usize, why: String| match at_start {
+        0 => format!("{later} {what}"),
+        n => format!("{n} {what} present at the start ({why}), {later} after"),
+    };
     eprintln!(
-        "safety (filter {}): {} collisions, {} incursions, closest pair {:.2} m, closest to shore {:.2} m, interventions {:.2} % of vessel-ticks (safety.json)",
+        "safety (filter {}): {}, {}, closest pair {:.2} m, closest to shore {:.2} m, interventions {:.2} % of vessel-ticks (safety.json)",
         if safety.filter { "on" } else { "off" },
-        safety.collisions,
-        safety.incursions,
+        episodes(
+            "collisions",
+            safety.collisions_at_start,
+            safety.collisions,
+            format!(
+                "the scenario's starts put hulls within {} m of each other",
+                2.0 * safety.hull_radius
+            ),
+        ),
+        episodes(
+            "incursions",
+            safety.incursions_at_start,
+            safety.incursions,
+            format!(
+                "the scenario's starts are within the hull radius, {} m, of the shore",
+                safety.hull_radius
+            ),
+        ),
         safety.min_pair_distance.unwrap_or(f64::INFINITY),
         safety.min_shore_clearance,
         100.0 * safety.intervention_rate,
     );
+    if let Some(file) = written.recording {
+        eprintln!("recorded: {}", file.display());
+    }
     Ok(())
 }
 
