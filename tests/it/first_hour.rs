@@ -155,29 +155,11 @@ fn a_refused_start_says_only_that_it_is_refused() {
     assert!(stderr.contains("without a token"), "{stderr}");
 
     // A data directory another coordinator holds.
-    let mut first = seacover();
-    first
-        .args([
-            "serve",
-            "--bind",
-            "127.0.0.1:0",
-            "--no-record",
-            "--data-dir",
-        ])
-        .arg(data.path())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null());
+    let mut first = crate::common::server::serve_unrecorded(data.path());
+    first.stderr(Stdio::null());
     let (child, _) = start(first);
     let _first = KillOnDrop(child);
-    let out = seacover()
-        .args([
-            "serve",
-            "--bind",
-            "127.0.0.1:0",
-            "--no-record",
-            "--data-dir",
-        ])
-        .arg(data.path())
+    let out = crate::common::server::serve_unrecorded(data.path())
         .output()
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
@@ -241,19 +223,10 @@ fn an_agent_says_what_it_does_and_the_coordinator_too() {
 
     // A coordinator with a token; an agent with the wrong one is told why.
     let data = tempfile::tempdir().unwrap();
-    let mut serve = seacover();
+    let mut serve = crate::common::server::serve_unrecorded(data.path());
     serve
-        .args([
-            "serve",
-            "--bind",
-            "127.0.0.1:0",
-            "--no-record",
-            "--data-dir",
-        ])
-        .arg(data.path())
         .env("SEACOVER_TOKEN", "right")
         .env_remove("RUST_LOG")
-        .stdout(Stdio::piped())
         .stderr(Stdio::piped());
     let (mut child, addr) = start(serve);
     let server_log = child.stderr.take().unwrap();

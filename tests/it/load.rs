@@ -16,18 +16,8 @@ use tokio_util::sync::CancellationToken;
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn twenty_links_are_held_and_commanded_every_tick() {
     let data = tempfile::tempdir().unwrap();
-    let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_seacover"));
-    command
-        .args([
-            "serve",
-            "--bind",
-            "127.0.0.1:0",
-            "--no-record",
-            "--data-dir",
-        ])
-        .arg(data.path())
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::null());
+    let mut command = crate::common::server::serve_unrecorded(data.path());
+    command.stderr(std::process::Stdio::null());
     let (child, addr) = crate::common::server::start(command);
     let mut coordinator = crate::common::process::KillOnDrop(child);
 

@@ -19,6 +19,23 @@ pub fn serve_command(data: &Path, config: &Path) -> Command {
     command
 }
 
+/// `seacover serve` on port 0 with this data directory, the built-in
+/// mission and no recording; stdout piped for [`start`].
+pub fn serve_unrecorded(data: &Path) -> Command {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_seacover"));
+    command
+        .args([
+            "serve",
+            "--bind",
+            "127.0.0.1:0",
+            "--no-record",
+            "--data-dir",
+        ])
+        .arg(data)
+        .stdout(Stdio::piped());
+    command
+}
+
 /// Starts `command` and returns it with the address it printed.
 pub fn start(command: Command) -> (Child, String) {
     start_saying(command, "seacover: serving on")
