@@ -19,6 +19,8 @@
 
 pub mod link;
 pub mod mavlink;
+mod onboard;
+pub mod peer;
 
 use std::time::Duration;
 
@@ -30,12 +32,10 @@ use tokio_util::sync::CancellationToken;
 use link::LinkConfig;
 
 use crate::control::Vec3;
-use crate::control::controller::{ControllerGains, control};
-use crate::control::disturbance::Disturbance;
-use crate::control::model::{State, VesselParams, step};
-use crate::control::observer::{Observer, ObserverGains};
-use crate::control::reference::{Governor, Line, Peaks, agility};
-use crate::protocol::{AgilityDocument, CommandDocument, PoseDocument};
+use crate::control::model::{State, VesselParams};
+use crate::control::reference::agility;
+use crate::protocol::AgilityDocument;
+use onboard::Onboard;
 
 /// One simulated vessel's settings.
 #[derive(Debug, Clone)]
@@ -152,107 +152,6 @@ pub fn fleet(
         vessels[0].id = id;
     }
     Ok(vessels)
-}
-
-/// The on-board simulation of one vessel.
-struct Onboard {
-    params: VesselParams,
-    state: State,
-    observer: Observer,
-    controller: ControllerGains,
-    disturbance: Disturbance,
-    t: f64,
-    /// The newest command and the on-board time it arrived.
-    command: Option<(CommandDocument, f64)>,
-    governor: Governor,
-    /// Largest tracking error and command lag since the previous pose.
-    peaks: Peaks,
-}
-
-impl Onboard {
-    fn new(v: &VesselConfig) -> Self {
-        Onboard {
-            params: v.params,
-            state: v.start,
-            observer: Observer::new(v.params, ObserverGains::default()),
-            controller: ControllerGains::default(),
-            disturbance: Disturbance::Paper { index: v.index },
-            t: 0.0,
-            command: None,
-            governor: Governor::new(v.params, v.start.vel),
-            peaks: Peaks::default(),
-        }
-    }
-
-    /// Advances `seconds` of simulated time in 1 ms steps.
-    fn advance(&mut self, seconds: f64) {
-        let h = 1e-3;
-        let steps = (seconds / h).round() as usize;
-        for _ in 0..steps {
-            let line = match &self.command {
-                Some((c, at)) if self.t - at <= 1.0 => Line {
-                    u_d: c.u_d,
-                    r_d: c.r_d,
-                    u_d_dot: c.u_d_dot,
-                    r_d_dot: c.r_d_dot,
-                }
-                .at(self.t - at),
-                // No command, or a stale one: hold station.
-                _ => Line::HOLD.at(0.0),
-            };
-            self.observer.measure(self.state.vel, h);
-            let (vel, est) = (self.state.vel, self.observer.estimate());
-            let reference = self.governor.step(&line, vel, est, h);
-            self.peaks.record(vel, &line, &reference);
-            let (tu, tr) = control(&self.params, &self.controller, vel, &reference, est);
-            let d = &self.disturbance;
-            let (next, applied) = step(&self.params, &self.state, tu, tr, self.t, h, |t, s| {
-                d.value(t, s.psi)
-            });
-            self.observer.actuate(Vec3::new(applied.0, 0.0, applied.1));
-            self.state = next;
-            self.t += h;
-        }
-    }
-
-    /// The pose as the vessel's sensors would give it: positions to the
-    /// millimetre, angles to 10 µrad, speeds to 0.1 mm/s, its clock and
-    /// forces to four decimals. Finer than any GNSS/INS, and it keeps the
-    /// 17-digit noise of a double out of the wire and of every recording
-    /// (it was most of an 8-vessel recording's size).
-    /// Also starts the next interval of `tracking_error` and `command_lag`.
-    fn pose(&mut self) -> PoseDocument {
-        let Peaks { error, lag } = std::mem::take(&mut self.peaks);
-        let pair = |(u, r): (f64, f64)| serde_json::json!({"u": decimals(u.abs(), 5), "r": decimals(r.abs(), 5)});
-        let tau = self.disturbance.value(self.t, self.state.psi);
-        let est = self.observer.estimate();
-        let s = &self.state;
-        let tau_d = [tau.x, tau.y, tau.z].map(|v| decimals(v, 4));
-        let tau_d_hat = [est.x, est.y, est.z].map(|v| decimals(v, 4));
-        PoseDocument {
-            t: decimals(self.t, 4),
-            x: decimals(s.x, 3),
-            y: decimals(s.y, 3),
-            psi: decimals(s.psi, 5),
-            u: decimals(s.vel.x, 4),
-            v: decimals(s.vel.y, 4),
-            r: decimals(s.vel.z, 5),
-            controlled: None,
-            telemetry: Some(serde_json::json!({
-                "tau_d": tau_d,
-                "tau_d_hat": tau_d_hat,
-                "tracking_error": pair(error),
-                "command_lag": pair(lag),
-            })),
-        }
-    }
-}
-
-/// `v` rounded to `n` decimals, as the nearest double to that decimal (so
-/// that it prints as the decimal).
-fn decimals(v: f64, n: i32) -> f64 {
-    let scale = 10f64.powi(n);
-    (v * scale).round() / scale
 }
 
 /// Runs every vessel until `shutdown`.

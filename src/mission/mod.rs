@@ -156,6 +156,31 @@ impl Mission {
         })
     }
 
+    /// A mission from a file's text: a mission document (as `GET
+    /// /api/v1/mission` gives it, extra fields such as a peer fleet's
+    /// `revision` ignored) or a scenario document, whose origin, region,
+    /// risk and first vessel's actuator replace the paper mission's, with
+    /// the default guidance, safety and tick rate.
+    pub fn from_text(text: &str) -> Result<Mission, MissionError> {
+        if let Ok(doc) = serde_json::from_str::<MissionDocument>(text) {
+            return Mission::from_document(&doc);
+        }
+        let local = scenario::parse_document(text)?;
+        let mut doc = Mission::paper().document();
+        doc.origin = local.origin;
+        if let Some(region) = local.region {
+            doc.region = region;
+        }
+        if let Some(risk) = local.risk {
+            doc.risk = risk;
+        }
+        if let Some(v) = local.vessels.first() {
+            doc.actuator.k = v.k.unwrap_or(doc.actuator.k);
+            doc.actuator.beta = v.beta.unwrap_or(doc.actuator.beta);
+        }
+        Mission::from_document(&doc)
+    }
+
     pub fn document(&self) -> MissionDocument {
         MissionDocument {
             origin: self.origin,

@@ -68,7 +68,9 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let quiet = matches!(cli.command, Command::Evaluate(_) | Command::Sim(_));
     let filter = tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| {
-        tracing_subscriber::EnvFilter::new(if quiet { "warn" } else { "info" })
+        // Zenoh's own info lines (its id, every endpoint, scouting) are
+        // for debugging Zenoh; ours say what a member does.
+        tracing_subscriber::EnvFilter::new(if quiet { "warn" } else { "info,zenoh=warn" })
     });
     // Colour only for a person at a terminal, never into a file or a pipe.
     let logs = tracing_subscriber::fmt()

@@ -119,3 +119,32 @@ impl Preset {
         }
     }
 }
+
+/// The Zenoh flags of `agent --peer` and `serve --peer`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct ZenohArgs {
+    /// Listen for other members on this Zenoh endpoint (repeatable), e.g.
+    /// `tcp/0.0.0.0:7447`; for networks where multicast scouting does not
+    /// pass.
+    #[arg(long, value_name = "ENDPOINT")]
+    zenoh_listen: Vec<String>,
+    /// Connect to a member or router at this Zenoh endpoint (repeatable),
+    /// e.g. `tcp/192.168.1.10:7447`.
+    #[arg(long, value_name = "ENDPOINT")]
+    zenoh_connect: Vec<String>,
+    /// A Zenoh JSON5 configuration file (credentials, TLS, scouting);
+    /// the flags above override its endpoints.
+    #[arg(long, value_name = "FILE")]
+    zenoh_config: Option<std::path::PathBuf>,
+}
+
+impl ZenohArgs {
+    pub fn options(&self) -> seacover::agent::peer::session::ZenohOptions {
+        seacover::agent::peer::session::ZenohOptions {
+            mode: Default::default(),
+            listen: self.zenoh_listen.clone(),
+            connect: self.zenoh_connect.clone(),
+            config: self.zenoh_config.clone(),
+        }
+    }
+}

@@ -225,6 +225,30 @@ pub struct Mover {
     pub max_speed: f64,
     /// The fastest it turns [rad/s].
     pub turn_rate: f64,
+    /// How sure the others are of it ([`Margin::KNOWN`] for a vessel whose
+    /// state is current).
+    pub margin: Margin,
+}
+
+/// What the others keep in hand for a vessel they are not sure of: a
+/// vessel of a peer fleet that fell silent is still physically there,
+/// somewhere within `radius` of where it was last heard, and it may no
+/// longer keep its half of any gap.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Margin {
+    /// Added to the safety distance towards this vessel [m].
+    pub radius: f64,
+    /// Whether it keeps its half of each gap (the reciprocal split); when
+    /// not, the other takes the whole budget, as it does towards the shore.
+    pub reciprocal: bool,
+}
+
+impl Margin {
+    /// A vessel whose state is current and whose filter runs.
+    pub const KNOWN: Margin = Margin {
+        radius: 0.0,
+        reciprocal: true,
+    };
 }
 
 impl Desire {
@@ -236,6 +260,7 @@ impl Desire {
             bow: self.bow,
             max_speed: self.max_speed,
             turn_rate: self.turn_rate,
+            margin: Margin::KNOWN,
         }
     }
 }
@@ -252,6 +277,9 @@ pub struct Traffic<'a> {
     shore: &'a Shore,
     fleet: Vec<Mover>,
     grid: NeighbourGrid,
+    /// The largest [`Margin::radius`] of the fleet: neighbours are searched
+    /// that much farther.
+    widest: f64,
 }
 
 impl<'a> Traffic<'a> {
@@ -262,7 +290,9 @@ impl<'a> Traffic<'a> {
             .iter()
             .map(|m| m.turn_rate)
             .fold(f64::INFINITY, f64::min);
-        let pair_radius = barrier.safety_distance + barrier.horizon(2.0 * top, slowest_turn);
+        let widest = fleet.iter().map(|m| m.margin.radius).fold(0.0, f64::max);
+        let pair_radius =
+            barrier.safety_distance + widest + barrier.horizon(2.0 * top, slowest_turn);
         let positions: Vec<Point> = fleet.iter().map(|m| m.position).collect();
         let grid = NeighbourGrid::new(&positions, pair_radius);
         Traffic {
@@ -270,6 +300,7 @@ impl<'a> Traffic<'a> {
             shore,
             fleet,
             grid,
+            widest,
         }
     }
 
@@ -295,7 +326,9 @@ impl<'a> Traffic<'a> {
         constraints.clear();
         self.grid.within(
             i,
-            barrier.safety_distance + barrier.horizon(2.0 * me.max_speed, me.turn_rate),
+            barrier.safety_distance
+                + self.widest
+                + barrier.horizon(2.0 * me.max_speed, me.turn_rate),
             neighbours,
         );
         for &j in neighbours.iter() {
@@ -310,12 +343,16 @@ impl<'a> Traffic<'a> {
             } else {
                 Point { x: 1.0, y: 0.0 }
             };
-            let closing = -dot(n, me.actual - self.fleet[j].actual);
-            let gap =
-                dist - barrier.safety_distance - barrier.prediction(n, &me) * closing.max(0.0);
+            let other = &self.fleet[j];
+            let closing = -dot(n, me.actual - other.actual);
+            let gap = dist
+                - barrier.safety_distance
+                - other.margin.radius
+                - barrier.prediction(n, &me) * closing.max(0.0);
+            let share = if other.margin.reciprocal { 0.5 } else { 1.0 };
             constraints.push(HalfPlane {
                 a: n,
-                b: -0.5 * barrier.stopping_speed(gap),
+                b: -share * barrier.stopping_speed(gap),
             });
         }
         let inside = self.shore.region().contains(p);

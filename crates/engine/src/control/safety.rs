@@ -59,7 +59,7 @@
 
 use std::borrow::{Borrow, BorrowMut};
 
-use super::barrier::{Barrier, Mover, Safe, Scratch, Traffic};
+use super::barrier::{Barrier, Margin, Mover, Safe, Scratch, Traffic};
 use super::guidance::{Command, Guidance, GuidanceMode};
 use super::model::State;
 use crate::coverage::goal::reachable_goal;
@@ -245,6 +245,20 @@ impl SafetyLayer {
         states: &[State],
         guidance: &[G],
     ) -> SafetyTick<'_> {
+        self.prepare_with(t, states, guidance, |_| Margin::KNOWN)
+    }
+
+    /// [`SafetyLayer::prepare`] with a [`Margin`] for each vessel: a peer
+    /// node passes its neighbours as it last heard them, each with the
+    /// room it keeps for what it does not know of them (a silent neighbour
+    /// is still there, somewhere near where it was last heard).
+    pub fn prepare_with<G: Borrow<Guidance>>(
+        &self,
+        t: f64,
+        states: &[State],
+        guidance: &[G],
+        margin: impl Fn(usize) -> Margin,
+    ) -> SafetyTick<'_> {
         let traffic = self.params.filter.then(|| {
             Traffic::new(
                 &self.params.barrier(),
@@ -252,7 +266,8 @@ impl SafetyLayer {
                 states
                     .iter()
                     .zip(guidance)
-                    .map(|(s, g)| {
+                    .enumerate()
+                    .map(|(i, (s, g))| {
                         let gains = g.borrow().gains;
                         let (vx, vy) = s.ground_velocity();
                         Mover {
@@ -264,6 +279,7 @@ impl SafetyLayer {
                             },
                             max_speed: gains.max_speed,
                             turn_rate: gains.max_yaw_rate,
+                            margin: margin(i),
                         }
                     })
                     .collect(),

@@ -13,7 +13,8 @@
 //! Code map: [`density`] Φ; [`fleet`] f_i and the vessels; [`partition`] the
 //! cells; [`integrate`] the integrals of one cell, by [`boundary`] edge
 //! integrals (default) or adaptive triangle quadrature (reference);
-//! [`evaluate`](mod@evaluate) ties them together; [`goal`] turns a centroid
+//! [`evaluate`](mod@evaluate) ties them together; [`range`] is one vessel's
+//! range-limited cell in a peer fleet; [`goal`] turns a centroid
 //! into a goal a vessel can reach among islands.
 
 pub mod boundary;
@@ -24,6 +25,7 @@ pub mod gaussian;
 pub mod goal;
 pub mod integrate;
 pub mod partition;
+pub mod range;
 
 pub use density::{RiskField, RiskObject};
 pub use evaluate::{CellResult, Evaluation, Options, evaluate};

@@ -1,13 +1,33 @@
 //! `seacover agent`: simulated vessels, each on its own link to a
-//! coordinator; or, with `--mavlink`, a bridge of real autopilots onto it.
+//! coordinator; or, with `--mavlink`, a bridge of real autopilots onto it;
+//! or, with `--peer`, vessels of a fleet without a coordinator, over Zenoh.
 
 use crate::shell::{self, Preset};
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Coordinator base URL, e.g. http://127.0.0.1:8080.
-    #[arg(long, value_name = "URL")]
-    server: String,
+    /// Coordinator base URL, e.g. http://127.0.0.1:8080 (not with --peer).
+    #[arg(long, value_name = "URL", required_unless_present = "peer", conflicts_with = "peer")]
+    server: Option<String>,
+    /// Be members of a peer fleet instead: every vessel computes its own
+    /// cell from its neighbours' beacons over Zenoh; no coordinator needed
+    /// (docs/peer.md).
+    #[arg(long)]
+    peer: bool,
+    /// With --peer: the mission, revision 0 (a mission document as `GET
+    /// /api/v1/mission` gives it, or a scenario document); without it the
+    /// vessels hold station until a member gives them one.
+    #[arg(long, value_name = "FILE", requires = "peer")]
+    mission: Option<std::path::PathBuf>,
+    /// With --peer: the fleet's name, the Zenoh keys' second segment.
+    #[arg(long, value_name = "NAME", default_value = "seacover", requires = "peer")]
+    fleet: String,
+    /// With --peer and --id: where the vessel starts, in the mission's
+    /// local plane [m] and heading [rad]: X,Y or X,Y,PSI.
+    #[arg(long, value_name = "X,Y[,PSI]", requires = "id", value_parser = parse_start)]
+    start: Option<(f64, f64, f64)>,
+    #[command(flatten)]
+    zenoh: crate::shell::ZenohArgs,
     /// How many vessels (named usv-1 …); the first eight start where the
     /// paper's do, further ones at random in the paper's region.
     #[arg(long, value_name = "N", default_value_t = 8)]
@@ -55,11 +75,46 @@ pub struct Args {
 }
 
 pub async fn run(args: Args) -> anyhow::Result<()> {
-    if args.mavlink.is_empty() {
+    if args.peer && !args.mavlink.is_empty() {
+        anyhow::bail!("--peer with --mavlink (a bridge as a peer node) is not built yet")
+    } else if args.peer {
+        peer(args).await
+    } else if args.mavlink.is_empty() {
         simulate(args).await
     } else {
         bridge(args).await
     }
+}
+
+fn parse_start(s: &str) -> Result<(f64, f64, f64), String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|e| format!("{e}: expected X,Y or X,Y,PSI"))?;
+    match v[..] {
+        [x, y] if x.is_finite() && y.is_finite() => Ok((x, y, 0.0)),
+        [x, y, psi] if v.iter().all(|c| c.is_finite()) => Ok((x, y, psi)),
+        _ => Err("expected X,Y or X,Y,PSI (finite numbers)".into()),
+    }
+}
+
+async fn peer(args: Args) -> anyhow::Result<()> {
+    shell::check_warp(args.time_warp)?;
+    let mut vessels =
+        seacover::agent::fleet(args.vessels, args.id, args.preset.params(), args.seed)?;
+    if let Some((x, y, psi)) = args.start {
+        vessels[0].start.x = x;
+        vessels[0].start.y = y;
+        vessels[0].start.psi = psi;
+    }
+    let mut config = seacover::agent::peer::PeerConfig::new(args.fleet, args.zenoh.options())?;
+    config.time_warp = args.time_warp;
+    if let Some(path) = &args.mission {
+        config.mission = Some(seacover::agent::peer::mission_file(path)?);
+    }
+    seacover::agent::peer::node::run(config, vessels, shell::stop_on_signal()).await?;
+    Ok(())
 }
 
 async fn bridge(args: Args) -> anyhow::Result<()> {
@@ -70,7 +125,7 @@ async fn bridge(args: Args) -> anyhow::Result<()> {
         );
     }
     let config = seacover::agent::mavlink::BridgeConfig {
-        server: args.server,
+        server: args.server.unwrap_or_default(),
         endpoints: args.mavlink,
         arm: args.arm,
         token: args.token,
@@ -85,10 +140,11 @@ async fn bridge(args: Args) -> anyhow::Result<()> {
 async fn simulate(args: Args) -> anyhow::Result<()> {
     shell::check_warp(args.time_warp)?;
     let vessels = seacover::agent::fleet(args.vessels, args.id, args.preset.params(), args.seed)?;
-    let url = seacover::agent::link::link_url(&args.server).ok_or_else(|| {
+    let server = args.server.unwrap_or_default();
+    let url = seacover::agent::link::link_url(&server).ok_or_else(|| {
         anyhow::anyhow!(
             "--server must be an http:// or ws:// URL, got {:?}",
-            args.server
+            server
         )
     })?;
     let config = seacover::agent::AgentConfig {

@@ -11,6 +11,8 @@
 //! `[A-Za-z0-9_.-]{1,64}`, σ > 0, simple polygons, …) are checked by
 //! `mission::scenario` and answered with `invalid`.
 
+pub mod peer;
+
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use utoipa::ToSchema;

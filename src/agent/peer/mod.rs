@@ -1,0 +1,100 @@
+//! `seacover agent --peer`: a fleet that needs no coordinator (SPEC §6).
+//!
+//! Every vessel runs the coverage loop on board with its neighbours only,
+//! over Eclipse Zenoh in peer mode: it publishes its beacon 5 times a
+//! second, holds a liveliness token while it runs, hears the others'
+//! beacons, computes its own range-limited cell ([`step`]) and drives its
+//! hull's controller as the linked agent does. The mission travels on the
+//! fleet's mission key with a revision; every member keeps the newest valid
+//! revision and answers queries for it ([`board`]), so a vessel that joins
+//! late gets it from any peer.
+//!
+//! Parts: [`wire`] (encoding and value rules), [`table`] (neighbours, ages,
+//! refusals), [`board`] (mission revisions), [`step`] (the loop on board),
+//! [`session`] (Zenoh's configuration from the command line), [`node`]
+//! (the Zenoh declarations and the tasks).
+//!
+//! Invariants: no transport, discovery or membership of our own (Zenoh's
+//! scouting, routing, liveliness and authentication do it); a slow link
+//! never blocks a vessel (beacons are express and dropped on congestion);
+//! a vessel without a mission holds station and says so (`controlled`
+//! false); nothing received can change a vessel's mission but a valid,
+//! higher revision.
+
+pub mod board;
+pub mod node;
+pub mod session;
+pub mod step;
+pub mod table;
+pub mod wire;
+
+use std::path::PathBuf;
+
+use crate::mission::MissionError;
+use crate::protocol::peer::PeerMissionDocument;
+
+/// Why a peer process could not start.
+#[derive(Debug, thiserror::Error)]
+pub enum PeerError {
+    #[error("--fleet must match [A-Za-z0-9_.-]{{1,64}}")]
+    Fleet,
+    #[error("zenoh configuration: {0}")]
+    Config(String),
+    #[error("cannot read {path}: {source}")]
+    Read {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("the mission in {path}: {source}")]
+    Mission { path: PathBuf, source: MissionError },
+    #[error("zenoh: {0}")]
+    Zenoh(String),
+}
+
+/// A peer process's settings.
+#[derive(Debug, Clone)]
+pub struct PeerConfig {
+    pub fleet: String,
+    pub zenoh: session::ZenohOptions,
+    /// Revision 0 of the mission, from `--mission FILE`; without it the
+    /// vessels hold station until a peer gives them one.
+    pub mission: Option<PeerMissionDocument>,
+    pub time_warp: f64,
+    /// Beacons per second of mission time.
+    pub beacon_hz: f64,
+    pub ageing: table::Ageing,
+}
+
+impl PeerConfig {
+    pub fn new(fleet: String, zenoh: session::ZenohOptions) -> Result<PeerConfig, PeerError> {
+        if !wire::valid_fleet(&fleet) {
+            return Err(PeerError::Fleet);
+        }
+        Ok(PeerConfig {
+            fleet,
+            zenoh,
+            mission: None,
+            time_warp: 1.0,
+            beacon_hz: 5.0,
+            ageing: table::Ageing::default(),
+        })
+    }
+}
+
+/// The mission document in `path` (a mission as `GET /api/v1/mission`
+/// gives it, or a scenario document, whose region, risk and first
+/// vessel's actuator make the mission), as revision 0.
+pub fn mission_file(path: &std::path::Path) -> Result<PeerMissionDocument, PeerError> {
+    let text = std::fs::read_to_string(path).map_err(|source| PeerError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let mission = crate::mission::Mission::from_text(&text).map_err(|source| PeerError::Mission {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    Ok(PeerMissionDocument {
+        revision: 0,
+        mission: mission.document(),
+    })
+}

@@ -1,0 +1,61 @@
+//! Zenoh's configuration from seacover's command line: a JSON5 file
+//! (`--zenoh-config`, Zenoh's own format, for credentials and anything
+//! else), then the mode and the endpoints given as flags, which win.
+//!
+//! Without endpoints a member finds the others by Zenoh's multicast
+//! scouting (a LAN); `--zenoh-listen`/`--zenoh-connect` (`tcp/ADDR:PORT`,
+//! `udp/…`, `tls/…`) cover networks where multicast does not pass.
+
+use std::path::PathBuf;
+
+use super::PeerError;
+
+/// Which Zenoh role a process takes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Mode {
+    #[default]
+    Peer,
+    /// Routes for members that reach it over a routed network (LTE, VPN).
+    Router,
+}
+
+/// The Zenoh flags of `agent --peer` and `serve --peer`.
+#[derive(Debug, Clone, Default)]
+pub struct ZenohOptions {
+    pub mode: Mode,
+    pub listen: Vec<String>,
+    pub connect: Vec<String>,
+    pub config: Option<PathBuf>,
+}
+
+impl ZenohOptions {
+    /// The Zenoh configuration these options make.
+    pub fn config(&self) -> Result<zenoh::Config, PeerError> {
+        let mut config = match &self.config {
+            Some(path) => zenoh::Config::from_file(path.clone())
+                .map_err(|e| PeerError::Config(format!("{}: {e}", path.display())))?,
+            None => zenoh::Config::default(),
+        };
+        let mode = match self.mode {
+            Mode::Peer => "\"peer\"",
+            Mode::Router => "\"router\"",
+        };
+        config.insert_json5("mode", mode).map_err(bad)?;
+        let list = |v: &[String]| serde_json::to_string(v).expect("strings serialize");
+        if !self.listen.is_empty() {
+            config
+                .insert_json5("listen/endpoints", &list(&self.listen))
+                .map_err(bad)?;
+        }
+        if !self.connect.is_empty() {
+            config
+                .insert_json5("connect/endpoints", &list(&self.connect))
+                .map_err(bad)?;
+        }
+        Ok(config)
+    }
+}
+
+fn bad(e: impl std::fmt::Display) -> PeerError {
+    PeerError::Config(e.to_string())
+}

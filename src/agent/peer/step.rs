@@ -1,0 +1,113 @@
+//! One tick of the coverage loop on board a vessel of a peer fleet: its
+//! range-limited cell among the neighbours it hears
+//! ([`coverage::range`](crate::coverage::range)), its centroid, and the
+//! mission's safety layer with the neighbours as the traffic; the same
+//! engine functions as the coordinator's tick, for one vessel.
+//!
+//! Invariants: only fresh neighbours are in the partition (a silent one's
+//! water is taken over); every neighbour not yet forgotten is in the
+//! safety filter's traffic, a silent one with its uncertainty radius and
+//! not trusted to keep its half of a gap; neighbours with another β than
+//! this vessel's are left out of the partition (curved cell edges are the
+//! engine's next step) but kept as traffic. Pure: no I/O, no clock.
+
+use super::table::Neighbour;
+use crate::control::barrier::{Margin, Scratch};
+use crate::control::guidance::Guidance;
+use crate::control::model::State;
+use crate::control::Vec3;
+use crate::coverage::range::local_cell;
+use crate::coverage::{CellResult, Options, Vessel};
+use crate::geometry::Point;
+use crate::mission::Mission;
+use crate::protocol::CommandDocument;
+
+/// What the loop computed: the command for the hull, and the cell.
+#[derive(Debug, Clone)]
+pub struct Step {
+    pub command: CommandDocument,
+    pub cell: CellResult,
+    /// Neighbours in the partition.
+    pub partition: usize,
+}
+
+/// The neighbour's state as the safety filter reads it.
+fn state_of(n: &Neighbour) -> State {
+    let b = &n.beacon;
+    State {
+        x: b.x,
+        y: b.y,
+        psi: b.psi,
+        vel: Vec3::new(b.u, b.v, b.r),
+    }
+}
+
+/// One tick: `own` is this vessel's state and actuator (k, β as the wire
+/// carries them), `t` its mission time, `tick` the command's number.
+#[allow(clippy::too_many_arguments)]
+pub fn step(
+    mission: &Mission,
+    own: &State,
+    actuator: (f64, f64),
+    neighbours: &[Neighbour],
+    guidance: &mut Guidance,
+    t: f64,
+    tick: u64,
+    scratch: &mut Scratch,
+) -> Step {
+    let (k, beta) = actuator;
+    let me = Vessel {
+        position: Point { x: own.x, y: own.y },
+        k,
+        beta,
+    };
+    let fresh: Vec<Vessel> = neighbours
+        .iter()
+        .filter(|n| n.silent.is_none() && n.beacon.beta == beta)
+        .map(|n| Vessel {
+            position: Point {
+                x: n.beacon.x,
+                y: n.beacon.y,
+            },
+            k: n.beacon.k,
+            beta: n.beacon.beta,
+        })
+        .collect();
+    let partition = fresh.len();
+    let options = Options::default();
+    let cell = local_cell(&mission.region, &mission.risk, me, fresh, &options)
+        .or_else(|| local_cell(&mission.region, &mission.risk, me, [], &options))
+        .expect("a lone vessel of a valid mission is a valid fleet");
+    let mut states = Vec::with_capacity(neighbours.len() + 1);
+    states.push(*own);
+    states.extend(neighbours.iter().map(state_of));
+    let template = Guidance::new(mission.guidance);
+    let gains = vec![&template; states.len()];
+    let layer = &mission.layer;
+    let tick_inputs = layer.prepare_with(t, &states, &gains, |i| match i {
+        0 => Margin::KNOWN,
+        i => match neighbours[i - 1].silent {
+            None => Margin::KNOWN,
+            Some(s) => Margin {
+                radius: s.radius,
+                reciprocal: false,
+            },
+        },
+    });
+    let safe = layer.command(&tick_inputs, 0, own, &cell, guidance, scratch);
+    let (cmd, c) = (safe.command, cell.centroid);
+    Step {
+        command: CommandDocument {
+            tick,
+            u_d: cmd.u_d,
+            r_d: cmd.r_d,
+            u_d_dot: cmd.u_d_dot,
+            r_d_dot: cmd.r_d_dot,
+            centroid: [c.x, c.y],
+            e: cmd.e,
+            psi_e: cmd.psi_e,
+        },
+        cell,
+        partition,
+    }
+}

@@ -1,0 +1,306 @@
+//! What one peer process knows of the others: the newest beacon of every
+//! vessel it hears, how old it is, and every input it refused.
+//!
+//! ## Ages, and clocks that differ
+//! A beacon carries its sender's UTC time `t`. Boats' clocks are GPS- or
+//! NTP-disciplined, so they agree to milliseconds, not exactly: a
+//! receiver never trusts `t` for more than the transit. A beacon's age is
+//! the receiver's own monotonic time since it arrived plus its transit,
+//! `now_utc − t` at arrival clamped into [0, [`MAX_TRANSIT`]]: a sender
+//! whose clock runs ahead cannot make a beacon younger than its arrival,
+//! and one whose clock lags (or a beacon stuck in a queue) ages it at most
+//! by the clamp. Ordering uses `t` only between beacons of one sender,
+//! whose clock is one clock.
+//!
+//! ## Who is in the partition, and who is still an obstacle
+//! - **fresh** (age ≤ `stale_after`, 3 s by default): in the partition,
+//!   at its position extrapolated along its ground velocity by its age;
+//! - **silent** (older, up to `forget_after`, at least 60 s): no longer in
+//!   the partition (the others take its water), but still an obstacle for
+//!   the safety filter, at its last position with a radius that grows
+//!   with the silence ([`Silent::radius`]), and not trusted to keep its
+//!   half of any gap;
+//! - forgotten after that.
+//!
+//! ## Refusals
+//! Undecodable, oversized and out-of-range beacons, another fleet's
+//! beacons, and a second node claiming an id (a beacon whose id is one of
+//! this process's own vessels, or whose motion since the id's previous
+//! beacon is faster than [`wire::MAX_SPEED`](super::wire::MAX_SPEED)) are
+//! dropped and counted by reason.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::time::Instant;
+
+use super::wire::{self, Refusal};
+use crate::protocol::peer::BeaconDocument;
+
+/// The most a beacon's transit counts for in its age [s].
+pub const MAX_TRANSIT: f64 = 0.5;
+
+/// How a node judges its neighbours' beacons.
+#[derive(Debug, Clone, Copy)]
+pub struct Ageing {
+    /// A neighbour silent longer leaves the partition [s of mission time].
+    pub stale_after: f64,
+    /// A silent neighbour is an obstacle this long [s of mission time].
+    pub forget_after: f64,
+    /// Mission seconds per wall second (the time warp).
+    pub warp: f64,
+    /// Speed a silent hull is assumed able to drift at, on top of its last
+    /// ground speed [m/s].
+    pub drift: f64,
+}
+
+impl Default for Ageing {
+    fn default() -> Self {
+        Ageing {
+            stale_after: 3.0,
+            forget_after: 60.0,
+            warp: 1.0,
+            drift: 0.5,
+        }
+    }
+}
+
+#[derive(Debug, Clone)]
+struct Heard {
+    beacon: BeaconDocument,
+    arrived: Instant,
+    transit: f64,
+}
+
+/// A neighbour as the loop on board uses it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Neighbour {
+    pub id: String,
+    /// Age of its newest beacon [s of mission time].
+    pub age: f64,
+    /// Its beacon, position moved along its ground velocity by `age` when
+    /// fresh.
+    pub beacon: BeaconDocument,
+    /// `None` when fresh; the obstacle's radius when silent.
+    pub silent: Option<Silent>,
+}
+
+/// A silent neighbour's uncertainty.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Silent {
+    /// How far from its last position it may be [m]: its last ground speed
+    /// plus the drift, times the silence.
+    pub radius: f64,
+}
+
+/// The beacons heard by one process, and its refusals.
+#[derive(Debug, Default)]
+pub struct Table {
+    fleet: String,
+    /// This process's own vessels: nobody else may use their ids.
+    own: BTreeSet<String>,
+    heard: BTreeMap<String, Heard>,
+    refused: BTreeMap<Refusal, u64>,
+    received: u64,
+}
+
+impl Table {
+    pub fn new(fleet: &str, own: impl IntoIterator<Item = String>) -> Table {
+        Table {
+            fleet: fleet.to_string(),
+            own: own.into_iter().collect(),
+            ..Table::default()
+        }
+    }
+
+    pub fn refuse(&mut self, why: Refusal) {
+        *self.refused.entry(why).or_default() += 1;
+    }
+
+    pub fn refused(&self) -> BTreeMap<String, u64> {
+        self.refused
+            .iter()
+            .map(|(r, n)| (r.name().to_string(), *n))
+            .collect()
+    }
+
+    pub fn received(&self) -> u64 {
+        self.received
+    }
+
+    /// Takes one sample from the beacon key `key`, received at `now` (and
+    /// `now_utc`, s since 1970) from the network (`local` false), or from
+    /// one of this process's own vessels.
+    pub fn offer(
+        &mut self,
+        key: &str,
+        payload: &[u8],
+        local: bool,
+        now: Instant,
+        now_utc: f64,
+        ageing: &Ageing,
+    ) {
+        self.received += 1;
+        let Some((fleet, key_id)) = wire::Keys::parse_beacon(key) else {
+            return self.refuse(Refusal::Undecodable);
+        };
+        if fleet != self.fleet {
+            return self.refuse(Refusal::OtherFleet);
+        }
+        let beacon = match wire::decode(payload, key_id) {
+            Ok(b) => b,
+            Err(why) => return self.refuse(why),
+        };
+        if self.own.contains(&beacon.id) && !local {
+            return self.refuse(Refusal::IdConflict);
+        }
+        if let Some(prev) = self.heard.get(&beacon.id) {
+            let fresh = age(prev, now, ageing) <= ageing.stale_after;
+            let dt = beacon.t - prev.beacon.t;
+            if fresh && dt <= 0.0 {
+                // Late or repeated: the newer one is already here.
+                return;
+            }
+            let moved = (beacon.x - prev.beacon.x).hypot(beacon.y - prev.beacon.y);
+            // Sender seconds are wall seconds: the hull covers warp × as much.
+            if fresh && moved > wire::MAX_SPEED * dt * ageing.warp + 5.0 {
+                return self.refuse(Refusal::IdConflict);
+            }
+        }
+        let transit = (now_utc - beacon.t).clamp(0.0, MAX_TRANSIT);
+        self.heard.insert(
+            beacon.id.clone(),
+            Heard {
+                beacon,
+                arrived: now,
+                transit,
+            },
+        );
+    }
+
+    /// Everybody but `me` not yet forgotten, in id order (forgetting the
+    /// rest).
+    pub fn neighbours(&mut self, me: &str, now: Instant, ageing: &Ageing) -> Vec<Neighbour> {
+        self.heard
+            .retain(|_, h| age(h, now, ageing) <= ageing.forget_after);
+        self.heard
+            .iter()
+            .filter(|(id, _)| id.as_str() != me)
+            .map(|(id, h)| {
+                let age = age(h, now, ageing);
+                let b = &h.beacon;
+                let (s, c) = b.psi.sin_cos();
+                let (vx, vy) = (b.u * c - b.v * s, b.u * s + b.v * c);
+                if age <= ageing.stale_after {
+                    let mut beacon = b.clone();
+                    beacon.x += vx * age;
+                    beacon.y += vy * age;
+                    beacon.psi += b.r * age;
+                    Neighbour {
+                        id: id.clone(),
+                        age,
+                        beacon,
+                        silent: None,
+                    }
+                } else {
+                    Neighbour {
+                        id: id.clone(),
+                        age,
+                        beacon: b.clone(),
+                        silent: Some(Silent {
+                            radius: (vx.hypot(vy) + ageing.drift) * age,
+                        }),
+                    }
+                }
+            })
+            .collect()
+    }
+
+    /// Every vessel heard (own ones included) and its beacon's age [s of
+    /// mission time].
+    pub fn ages(&self, now: Instant, ageing: &Ageing) -> BTreeMap<String, f64> {
+        self.heard
+            .iter()
+            .map(|(id, h)| (id.clone(), age(h, now, ageing)))
+            .collect()
+    }
+}
+
+/// A beacon's age in mission seconds (see the module doc).
+fn age(h: &Heard, now: Instant, ageing: &Ageing) -> f64 {
+    (now.saturating_duration_since(h.arrived).as_secs_f64() + h.transit) * ageing.warp
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::time::Duration;
+
+    fn beacon(id: &str, t: f64, x: f64) -> Vec<u8> {
+        wire::encode(&BeaconDocument {
+            id: id.into(),
+            seq: 1,
+            t,
+            x,
+            y: 0.0,
+            psi: 0.0,
+            u: 1.0,
+            v: 0.0,
+            r: 0.0,
+            k: 0.5,
+            beta: 0.001,
+            rev: 0,
+            controlled: true,
+        })
+    }
+
+    #[test]
+    fn fresh_then_silent_then_forgotten() {
+        let ageing = Ageing::default();
+        let mut table = Table::new("bay", ["me".to_string()]);
+        let t0 = Instant::now();
+        let utc = 1.8e9;
+        table.offer("seacover/bay/beacon/a", &beacon("a", utc, 10.0), false, t0, utc, &ageing);
+        let n = table.neighbours("me", t0 + Duration::from_secs(1), &ageing);
+        assert_eq!(n.len(), 1);
+        assert!(n[0].silent.is_none());
+        assert!((n[0].beacon.x - 11.0).abs() < 1e-3, "extrapolated: {}", n[0].beacon.x);
+        let n = table.neighbours("me", t0 + Duration::from_secs(10), &ageing);
+        let radius = n[0].silent.unwrap().radius;
+        assert!((radius - 15.0).abs() < 1e-3, "{radius}");
+        assert_eq!(n[0].beacon.x, 10.0);
+        assert!(table.neighbours("me", t0 + Duration::from_secs(61), &ageing).is_empty());
+    }
+
+    #[test]
+    fn a_sender_clock_ahead_or_behind_changes_the_age_by_the_clamp_at_most() {
+        let ageing = Ageing::default();
+        let mut table = Table::new("bay", []);
+        let t0 = Instant::now();
+        // Stamped 5 s in the future, and 5 s in the past.
+        table.offer("seacover/bay/beacon/a", &beacon("a", 1.8e9 + 5.0, 0.0), false, t0, 1.8e9, &ageing);
+        table.offer("seacover/bay/beacon/b", &beacon("b", 1.8e9 - 5.0, 0.0), false, t0, 1.8e9, &ageing);
+        let ages = table.ages(t0, &ageing);
+        assert_eq!(ages["a"], 0.0);
+        assert_eq!(ages["b"], MAX_TRANSIT);
+    }
+
+    #[test]
+    fn refusals_are_counted_and_change_nothing() {
+        let ageing = Ageing::default();
+        let mut table = Table::new("bay", ["me".to_string()]);
+        let t0 = Instant::now();
+        let utc = 1.8e9;
+        table.offer("seacover/bay/beacon/a", &beacon("a", utc, 0.0), false, t0, utc, &ageing);
+        // Someone else claims "a" 500 m away a second later; another claims "me".
+        table.offer("seacover/bay/beacon/a", &beacon("a", utc + 1.0, 500.0), false, t0, utc, &ageing);
+        table.offer("seacover/bay/beacon/me", &beacon("me", utc, 0.0), false, t0, utc, &ageing);
+        table.offer("seacover/sea/beacon/b", &beacon("b", utc, 0.0), false, t0, utc, &ageing);
+        table.offer("seacover/bay/beacon/c", b"not cbor", false, t0, utc, &ageing);
+        let refused = table.refused();
+        assert_eq!(refused["id_conflict"], 2);
+        assert_eq!(refused["other_fleet"], 1);
+        assert_eq!(refused["undecodable"], 1);
+        let n = table.neighbours("me", t0, &ageing);
+        assert_eq!(n.len(), 1);
+        assert_eq!(n[0].beacon.x, 0.0);
+    }
+}

@@ -1,0 +1,87 @@
+//! The wire of a fleet without a coordinator (SPEC §6): what the vessels of
+//! a peer fleet, and a coordinator that joins it, put on Eclipse Zenoh.
+//! Shapes only; the CBOR encoding and every value rule live in
+//! `agent::peer::wire`.
+//!
+//! Keys, `<fleet>` the fleet's name:
+//! - `seacover/<fleet>/beacon/<id>`: a [`BeaconDocument`] as a CBOR map;
+//! - `seacover/<fleet>/alive/<id>`: a liveliness token per running vessel;
+//! - `seacover/<fleet>/mission`: a [`PeerMissionDocument`] as JSON;
+//! - `seacover/<fleet>/status/<id>`: a [`PeerStatusDocument`] as JSON,
+//!   answered to queries (what a vessel hears and what it refused).
+
+use std::collections::BTreeMap;
+
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
+use super::MissionDocument;
+
+/// One vessel's beacon, 5 times a second: a CBOR map (RFC 8949) with
+/// exactly these keys, in this order. Floats are sent in the shortest
+/// CBOR float that holds them to the precision given per field, so a
+/// beacon of an id of up to 6 characters is at most 96 bytes.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct BeaconDocument {
+    /// The vessel's id (`[A-Za-z0-9_.-]{1,64}`; at most 6 characters keep
+    /// the beacon within 96 bytes).
+    pub id: String,
+    /// Counts the vessel's beacons, modulo 65536 (so it costs at most 3
+    /// bytes); the receivers count gaps to measure loss.
+    pub seq: u16,
+    /// The sender's UTC time when it sent the beacon [s since 1970].
+    pub t: f64,
+    /// Position in the mission's local plane [m] (to ~4 mm at 50 km: a
+    /// 32-bit float).
+    pub x: f64,
+    pub y: f64,
+    /// Heading [rad] (to ~2 mrad: a 16-bit float).
+    pub psi: f64,
+    /// Surge, sway [m/s] and yaw rate [rad/s] (16-bit floats: ~1 mm/s at
+    /// 1 m/s).
+    pub u: f64,
+    pub v: f64,
+    pub r: f64,
+    /// The vessel's actuator: f(q) = k exp(−β ‖q − p‖²) (within 0.1 %).
+    pub k: f64,
+    pub beta: f64,
+    /// The mission revision the vessel works on.
+    pub rev: u32,
+    /// Whether seacover steers the vessel (false: its operator has it, or
+    /// it holds station for want of its mission or its autopilot).
+    pub controlled: bool,
+}
+
+/// `seacover/<fleet>/mission`: the mission document (as `GET
+/// /api/v1/mission`) with its revision. Every member keeps the highest
+/// valid revision it has seen, answers queries with it, and refuses (and
+/// counts) an invalid one.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct PeerMissionDocument {
+    /// Higher replaces lower; `--mission FILE` seeds revision 0.
+    pub revision: u32,
+    #[serde(flatten)]
+    pub mission: MissionDocument,
+}
+
+/// `seacover/<fleet>/status/<id>`: what one member hears and what it
+/// refused, for dashboards and tests.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct PeerStatusDocument {
+    pub id: String,
+    /// The mission revision it works on (`null` before it has one).
+    pub revision: Option<u32>,
+    /// Whether it steers its vessel now.
+    pub controlled: bool,
+    /// Neighbours in its partition now (heard within `stale_after`).
+    pub neighbours: usize,
+    /// Each vessel it has heard: the age of its newest beacon [s].
+    pub heard: BTreeMap<String, f64>,
+    /// Inputs it refused, by reason (`undecodable`, `oversized`,
+    /// `out_of_range`, `id_conflict`, `other_fleet`, `mission_invalid`,
+    /// `mission_older`).
+    pub refused: BTreeMap<String, u64>,
+    /// Beacons it received in all.
+    pub received: u64,
+}
