@@ -36,16 +36,7 @@ use crate::control::model::{State, VesselParams};
 use crate::control::reference::agility;
 use crate::protocol::AgilityDocument;
 use onboard::Onboard;
-
-/// One simulated vessel's settings.
-#[derive(Debug, Clone)]
-pub struct VesselConfig {
-    pub id: String,
-    /// Index used by the paper's disturbance model (1-based).
-    pub index: usize,
-    pub start: State,
-    pub params: VesselParams,
-}
+pub use onboard::VesselConfig;
 
 /// Settings shared by a fleet of agents.
 #[derive(Debug, Clone)]

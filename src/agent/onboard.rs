@@ -13,7 +13,15 @@ use crate::control::reference::{Governor, Line, Peaks};
 use crate::control::Vec3;
 use crate::protocol::{CommandDocument, PoseDocument};
 
-use super::VesselConfig;
+/// One simulated vessel's settings.
+#[derive(Debug, Clone)]
+pub struct VesselConfig {
+    pub id: String,
+    /// Index used by the paper's disturbance model (1-based).
+    pub index: usize,
+    pub start: State,
+    pub params: VesselParams,
+}
 
 /// The on-board simulation of one vessel.
 pub(crate) struct Onboard {

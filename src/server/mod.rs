@@ -16,6 +16,7 @@ pub mod error;
 pub mod events;
 pub mod metrics;
 pub mod openapi;
+pub mod peer;
 pub mod replay;
 pub mod responses;
 pub mod store;
@@ -66,6 +67,8 @@ pub struct ServeConfig {
     /// Where `mission` comes from, for the log line that says a new data
     /// directory was seeded with it.
     pub mission_source: String,
+    /// Join this peer fleet as a member (`serve --peer`).
+    pub peer: Option<peer::PeerMember>,
 }
 
 impl Default for ServeConfig {
@@ -80,6 +83,7 @@ impl Default for ServeConfig {
             write_burst: 100,
             record: None,
             mission_source: "the built-in paper scenario".into(),
+            peer: None,
         }
     }
 }
@@ -95,6 +99,8 @@ pub enum ServeError {
     Io(#[from] std::io::Error),
     #[error(transparent)]
     Store(#[from] store::StoreError),
+    #[error("--peer: {0}")]
+    Peer(#[from] crate::agent::peer::PeerError),
     #[error("the mission stored in {path} is not valid: {source}")]
     StoredMission {
         path: PathBuf,
@@ -175,6 +181,7 @@ pub struct Prepared {
     recorder: Recorder,
     recording: Option<crate::recorder::RecorderThread>,
     shutdown: CancellationToken,
+    peer: Option<peer::PeerMember>,
 }
 
 /// Checks the start and starts the tick task; see [`Prepared`].
@@ -186,6 +193,13 @@ pub async fn prepare(
     let addr = listener.local_addr()?;
     if !addr.ip().is_loopback() && config.token.is_none() {
         return Err(ServeError::PublicWithoutToken(addr));
+    }
+    if let Some(member) = &config.peer {
+        // A bad Zenoh configuration stops the start, not the member later.
+        member.zenoh.config()?;
+        if !crate::agent::peer::wire::valid_fleet(&member.fleet) {
+            return Err(crate::agent::peer::PeerError::Fleet.into());
+        }
     }
     metrics::handle();
     let (mission, store) = match &config.data_dir {
@@ -259,6 +273,7 @@ pub async fn prepare(
         recorder,
         recording,
         shutdown,
+        peer: config.peer,
     })
 }
 
@@ -279,7 +294,16 @@ impl Prepared {
             recorder,
             recording,
             shutdown,
+            peer,
         } = self;
+        if let Some(member) = peer {
+            let (app, stop) = (app.clone(), shutdown.clone());
+            tracker.spawn(async move {
+                if let Err(e) = self::peer::run(member, app, stop).await {
+                    tracing::error!(error = %e, "the peer fleet member stopped");
+                }
+            });
+        }
         // Commands and poses are small frames that must leave at once:
         // without TCP_NODELAY a command written while the link's previous
         // frame is unacknowledged waits for the vessel's delayed ACK (up to

@@ -9,7 +9,8 @@
 //! revision and answers queries for it ([`board`]), so a vessel that joins
 //! late gets it from any peer.
 //!
-//! Parts: [`wire`] (encoding and value rules), [`table`] (neighbours, ages,
+//! Parts: [`wire`] (encoding and value rules), [`credentials`] (Zenoh's
+//! user/password authentication for a fleet), [`table`] (neighbours, ages,
 //! refusals), [`board`] (mission revisions), [`step`] (the loop on board),
 //! [`session`] (Zenoh's configuration from the command line), [`node`]
 //! (the Zenoh declarations and the tasks).
@@ -22,34 +23,16 @@
 //! higher revision.
 
 pub mod board;
+pub mod credentials;
+mod error;
 pub mod node;
 pub mod session;
 pub mod step;
 pub mod table;
 pub mod wire;
 
-use std::path::PathBuf;
-
-use crate::mission::MissionError;
+pub use error::PeerError;
 use crate::protocol::peer::PeerMissionDocument;
-
-/// Why a peer process could not start.
-#[derive(Debug, thiserror::Error)]
-pub enum PeerError {
-    #[error("--fleet must match [A-Za-z0-9_.-]{{1,64}}")]
-    Fleet,
-    #[error("zenoh configuration: {0}")]
-    Config(String),
-    #[error("cannot read {path}: {source}")]
-    Read {
-        path: PathBuf,
-        source: std::io::Error,
-    },
-    #[error("the mission in {path}: {source}")]
-    Mission { path: PathBuf, source: MissionError },
-    #[error("zenoh: {0}")]
-    Zenoh(String),
-}
 
 /// A peer process's settings.
 #[derive(Debug, Clone)]

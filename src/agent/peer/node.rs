@@ -260,9 +260,13 @@ async fn run_vessel(
                 }
                 if t + 1e-9 >= next_beacon {
                     next_beacon = t + beacon_every;
-                    let (k, beta) = actuator.unwrap_or((0.0, 0.0));
+                    // Before it has a mission a vessel announces the
+                    // default actuator (the paper's), and that it holds.
+                    let (k, beta) = actuator.unwrap_or_else(|| {
+                        wire::wire_actuator(crate::coverage::fleet::DEFAULT_K, crate::coverage::fleet::DEFAULT_BETA)
+                    });
                     let s = &onboard.state;
-                    let controlled = current.is_some() && k > 0.0;
+                    let controlled = current.is_some();
                     let doc = BeaconDocument {
                         id: id.clone(),
                         seq,
@@ -273,8 +277,8 @@ async fn run_vessel(
                         u: s.vel.x,
                         v: s.vel.y,
                         r: s.vel.z,
-                        k: if controlled { k } else { 1.0 },
-                        beta: if controlled { beta } else { 1.0 },
+                        k,
+                        beta,
                         rev: current.as_ref().map_or(0, |r| r.revision),
                         controlled,
                     };

@@ -8,7 +8,7 @@
 
 use std::path::PathBuf;
 
-use super::PeerError;
+use super::error::PeerError;
 
 /// Which Zenoh role a process takes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -36,6 +36,9 @@ impl ZenohOptions {
                 .map_err(|e| PeerError::Config(format!("{}: {e}", path.display())))?,
             None => zenoh::Config::default(),
         };
+        if let Some(path) = &self.config {
+            resolve_dictionary(&mut config, path)?;
+        }
         let mode = match self.mode {
             Mode::Peer => "\"peer\"",
             Mode::Router => "\"router\"",
@@ -58,4 +61,25 @@ impl ZenohOptions {
 
 fn bad(e: impl std::fmt::Display) -> PeerError {
     PeerError::Config(e.to_string())
+}
+
+/// A relative `transport/auth/usrpwd/dictionary_file` is read next to the
+/// configuration file, not in the working directory, so a credentials
+/// directory works wherever it is copied.
+fn resolve_dictionary(config: &mut zenoh::Config, path: &std::path::Path) -> Result<(), PeerError> {
+    const KEY: &str = "transport/auth/usrpwd/dictionary_file";
+    let Ok(json) = config.get_json(KEY) else {
+        return Ok(());
+    };
+    let Ok(Some(file)) = serde_json::from_str::<Option<String>>(&json) else {
+        return Ok(());
+    };
+    let file = std::path::Path::new(&file);
+    if file.is_relative() {
+        let dir = path.parent().unwrap_or(std::path::Path::new("."));
+        let full = dir.join(file);
+        let value = serde_json::to_string(&full.to_string_lossy()).expect("strings serialize");
+        config.insert_json5(KEY, &value).map_err(bad)?;
+    }
+    Ok(())
 }

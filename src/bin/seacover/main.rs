@@ -10,7 +10,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
-use commands::{agent, bench, demo, evaluate, record, replay, serve, sim};
+use commands::{agent, bench, demo, evaluate, fleet, record, replay, serve, sim};
 
 #[derive(Parser)]
 #[command(
@@ -53,6 +53,11 @@ enum Command {
         #[command(subcommand)]
         what: record::Command,
     },
+    /// What a peer fleet needs before it sails: `fleet credentials DIR`.
+    Fleet {
+        #[command(subcommand)]
+        what: fleet::Command,
+    },
     /// Benchmarks against a running coordinator.
     Bench {
         #[command(subcommand)]
@@ -88,6 +93,7 @@ fn main() -> ExitCode {
         Command::Demo(args) => shell::report(shell::block_on(demo::run(args))),
         Command::Replay(args) => shell::report(shell::block_on(replay::run(args))),
         Command::Record { what } => shell::report(record::run(what)),
+        Command::Fleet { what } => shell::report(fleet::run(what)),
         Command::Bench { kind } => shell::report(shell::block_on(bench::run(kind))),
         Command::Sim(args) => sim::run(args),
     }

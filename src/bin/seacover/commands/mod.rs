@@ -4,6 +4,7 @@ pub mod agent;
 pub mod bench;
 pub mod demo;
 pub mod evaluate;
+pub mod fleet;
 pub mod record;
 pub mod replay;
 pub mod serve;

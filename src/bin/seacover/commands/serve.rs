@@ -40,6 +40,27 @@ pub struct Args {
     /// allowed: 0.5 is thirty seconds).
     #[arg(long, value_name = "MINUTES", default_value_t = 60.0, value_parser = positive_minutes)]
     record_max_minutes: f64,
+    /// Join a peer fleet as a member (docs/peer.md): publish the mission
+    /// to it (each accepted write a new revision) and show its vessels
+    /// from their beacons; no commands are sent.
+    #[arg(long)]
+    peer: bool,
+    /// With --peer: the fleet's name.
+    #[arg(long, value_name = "NAME", default_value = "seacover", requires = "peer")]
+    fleet: String,
+    /// With --peer: `peer`, or `router` to route for members that reach
+    /// this one over a routed network (LTE, VPN).
+    #[arg(long, value_enum, default_value = "peer", requires = "peer")]
+    zenoh_mode: ZenohMode,
+    #[command(flatten)]
+    zenoh: shell::ZenohArgs,
+}
+
+/// `--zenoh-mode`.
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum ZenohMode {
+    Peer,
+    Router,
 }
 
 /// `--record-max-minutes`: a positive, finite number of minutes.
@@ -83,6 +104,16 @@ pub async fn run(args: Args) -> anyhow::Result<()> {
         write_burst: settings.write_burst,
         record,
         mission_source,
+        peer: args.peer.then(|| {
+            let mut zenoh = args.zenoh.options();
+            if let ZenohMode::Router = args.zenoh_mode {
+                zenoh.mode = seacover::agent::peer::session::Mode::Router;
+            }
+            seacover::server::peer::PeerMember {
+                fleet: args.fleet.clone(),
+                zenoh,
+            }
+        }),
     };
     let server = seacover::server::prepare(listener, config, stop).await?;
     // The first line of output is the address, so scripts and tests can

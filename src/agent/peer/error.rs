@@ -1,0 +1,24 @@
+//! Why a peer process could not start.
+
+use std::path::PathBuf;
+
+use crate::mission::MissionError;
+
+/// Why a peer process could not start.
+#[derive(Debug, thiserror::Error)]
+pub enum PeerError {
+    #[error("--fleet must match [A-Za-z0-9_.-]{{1,64}}")]
+    Fleet,
+    #[error("zenoh configuration: {0}")]
+    Config(String),
+    #[error("cannot read {path}: {source}")]
+    Read {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("the mission in {path}: {source}")]
+    Mission { path: PathBuf, source: MissionError },
+    #[error("zenoh: {0}")]
+    Zenoh(String),
+}
+

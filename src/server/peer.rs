@@ -1,0 +1,271 @@
+//! `seacover serve --peer`: the coordinator as a member of a peer fleet
+//! (SPEC §6). It publishes the mission (each accepted REST write becomes a
+//! new revision), answers the fleet's queries for it, and shows the fleet
+//! from its beacons: every vessel it hears is registered with the tick task
+//! as a vessel whose link is this member, so the dashboard, `GET
+//! /api/v1/vessels`, `/api/v1/coverage`, the stream and the recording show
+//! it as they show a linked one. It sends no commands: what the tick would
+//! command is computed for display and dropped here.
+//!
+//! Invariants: the revision it publishes only grows, and starts above the
+//! highest the fleet holds when it joins (a restarted coordinator does not
+//! publish an old revision number); a beacon that fails the wire's checks
+//! changes nothing and is counted (`seacover_peer_refused_total`); a vessel
+//! whose liveliness token goes leaves the tick task's links as a closed
+//! link does.
+
+use std::collections::BTreeMap;
+use std::sync::atomic::Ordering;
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+use tokio::sync::{mpsc, oneshot, watch};
+use tokio_util::sync::CancellationToken;
+use zenoh::Wait;
+use zenoh::sample::SampleKind;
+
+use super::app::AppState;
+use super::coordinator::Request;
+use crate::agent::peer::PeerError;
+use crate::agent::peer::session::ZenohOptions;
+use crate::agent::peer::wire::{self, Keys};
+use crate::protocol::peer::PeerMissionDocument;
+use crate::protocol::{ActuatorDocument, MissionDocument, PoseDocument};
+
+/// Counter of refused peer inputs, by `reason`.
+pub const PEER_REFUSED: &str = "seacover_peer_refused_total";
+/// Gauge of the mission revision the coordinator publishes.
+pub const PEER_REVISION: &str = "seacover_peer_mission_revision";
+
+/// `serve --peer`'s settings.
+#[derive(Debug, Clone)]
+pub struct PeerMember {
+    pub fleet: String,
+    pub zenoh: ZenohOptions,
+}
+
+/// What the member knows of one vessel it registered.
+struct Heard {
+    link: u64,
+    poses: watch::Sender<Option<PoseDocument>>,
+}
+
+/// What the beacon callback hands the member's task.
+enum Event {
+    Beacon(String, Vec<u8>),
+    Gone(String),
+}
+
+/// Joins the fleet and runs until `shutdown`.
+pub async fn run(
+    member: PeerMember,
+    app: AppState,
+    shutdown: CancellationToken,
+) -> Result<(), PeerError> {
+    if !wire::valid_fleet(&member.fleet) {
+        return Err(PeerError::Fleet);
+    }
+    let zerr = |e: zenoh::Error| PeerError::Zenoh(e.to_string());
+    let session = zenoh::open(member.zenoh.config()?).await.map_err(zerr)?;
+    let keys = Keys {
+        fleet: member.fleet.clone(),
+    };
+    // The highest revision the fleet holds now.
+    let mut fleet_revision: Option<(u32, MissionDocument)> = None;
+    if let Ok(replies) = session
+        .get(keys.mission())
+        .timeout(Duration::from_secs(1))
+        .await
+    {
+        while let Ok(reply) = replies.recv_async().await {
+            if let Ok(sample) = reply.result()
+                && let Ok(doc) = wire::decode_mission(&sample.payload().to_bytes())
+                && fleet_revision.as_ref().is_none_or(|(r, _)| doc.revision > *r)
+            {
+                fleet_revision = Some((doc.revision, doc.mission));
+            }
+        }
+    }
+    let ours = app.snapshot.borrow().document.mission.clone();
+    let revision = match &fleet_revision {
+        Some((r, doc)) if *doc == ours => *r,
+        Some((r, _)) => r + 1,
+        None => 0,
+    };
+    let published: Arc<Mutex<Arc<Vec<u8>>>> = Arc::new(Mutex::new(Arc::new(
+        serde_json::to_vec(&PeerMissionDocument {
+            revision,
+            mission: ours.clone(),
+        })
+        .expect("documents serialize"),
+    )));
+    let mission_key = keys.mission();
+    let answer = published.clone();
+    let _queryable = session
+        .declare_queryable(keys.mission())
+        .callback(move |query| {
+            let json = answer.lock().expect("mission lock").clone();
+            let _ = query.reply(&mission_key, json.as_slice()).wait();
+        })
+        .await
+        .map_err(zerr)?;
+    let publisher = session
+        .declare_publisher(keys.mission())
+        .await
+        .map_err(zerr)?;
+    let put = |json: &Arc<Vec<u8>>| publisher.put(json.as_slice().to_vec());
+    let first = published.lock().expect("mission lock").clone();
+    put(&first).await.map_err(zerr)?;
+    metrics::gauge!(PEER_REVISION).set(revision as f64);
+    tracing::info!(fleet = %member.fleet, revision, "joined the peer fleet; mission published");
+
+    let (events, mut incoming) = mpsc::channel::<Event>(4096);
+    let tx = events.clone();
+    let fleet = member.fleet.clone();
+    let _beacons = session
+        .declare_subscriber(Keys::all_beacons())
+        .callback(move |sample| {
+            let key = sample.key_expr().as_str();
+            match Keys::parse_beacon(key) {
+                Some((f, _)) if f != fleet => {
+                    metrics::counter!(PEER_REFUSED, "reason" => "other_fleet").increment(1);
+                }
+                Some((_, id)) => {
+                    // Full: this beacon is dropped; the vessel's next one
+                    // supersedes it anyway.
+                    let _ = tx.try_send(Event::Beacon(id.to_string(), sample.payload().to_bytes().to_vec()));
+                }
+                None => {}
+            }
+        })
+        .await
+        .map_err(zerr)?;
+    let tx = events.clone();
+    let _alive = session
+        .liveliness()
+        .declare_subscriber(keys.alive_all())
+        .history(true)
+        .callback(move |sample| {
+            if sample.kind() == SampleKind::Delete
+                && let Some(id) = sample.key_expr().as_str().rsplit('/').next()
+            {
+                let _ = tx.try_send(Event::Gone(id.to_string()));
+            }
+        })
+        .await
+        .map_err(zerr)?;
+
+    let mut snapshots = app.snapshot.clone();
+    let mut revision = revision;
+    let mut last = ours;
+    let mut heard: BTreeMap<String, Heard> = BTreeMap::new();
+    // Vessels the tick task refused (another β, a full fleet), with the
+    // actuator they had: asked again only when it changes.
+    let mut refused: BTreeMap<String, (f64, f64)> = BTreeMap::new();
+    loop {
+        tokio::select! {
+            _ = shutdown.cancelled() => break,
+            Ok(()) = snapshots.changed() => {
+                let mission = snapshots.borrow_and_update().document.mission.clone();
+                if mission != last {
+                    revision += 1;
+                    let json = Arc::new(serde_json::to_vec(&PeerMissionDocument { revision, mission: mission.clone() }).expect("documents serialize"));
+                    *published.lock().expect("mission lock") = json.clone();
+                    if let Err(e) = put(&json).await {
+                        tracing::warn!(error = %e, "mission revision not published");
+                    }
+                    metrics::gauge!(PEER_REVISION).set(revision as f64);
+                    tracing::info!(revision, "published a new mission revision to the fleet");
+                    last = mission;
+                }
+            }
+            Some(event) = incoming.recv() => match event {
+                Event::Beacon(id, bytes) => {
+                    let beacon = match wire::decode(&bytes, &id) {
+                        Ok(b) => b,
+                        Err(why) => {
+                            metrics::counter!(PEER_REFUSED, "reason" => why.name()).increment(1);
+                            continue;
+                        }
+                    };
+                    let pose = PoseDocument {
+                        t: beacon.t,
+                        x: beacon.x,
+                        y: beacon.y,
+                        psi: beacon.psi,
+                        u: beacon.u,
+                        v: beacon.v,
+                        r: beacon.r,
+                        controlled: Some(beacon.controlled),
+                        telemetry: None,
+                    };
+                    if let Some(h) = heard.get(&id) {
+                        h.poses.send_replace(Some(pose));
+                        continue;
+                    }
+                    if refused.get(&id) == Some(&(beacon.k, beacon.beta)) {
+                        continue;
+                    }
+                    // The vessel's actuator: the mission's when the beacon
+                    // carries it as the wire rounds it.
+                    let mission = &last.actuator;
+                    let actuator = if wire::wire_actuator(mission.k, mission.beta) == (beacon.k, beacon.beta) {
+                        *mission
+                    } else {
+                        ActuatorDocument { k: beacon.k, beta: beacon.beta }
+                    };
+                    match register(&app, &id, actuator, pose).await {
+                        Some(h) => { heard.insert(id, h); }
+                        None => { refused.insert(id, (beacon.k, beacon.beta)); }
+                    }
+                }
+                Event::Gone(id) => {
+                    refused.remove(&id);
+                    if let Some(h) = heard.remove(&id) {
+                        let _ = app.requests.send(Request::Gone { id, link: h.link }).await;
+                    }
+                }
+            },
+        }
+    }
+    for (id, h) in heard {
+        let _ = app.requests.send(Request::Gone { id, link: h.link }).await;
+    }
+    let _ = session.close().await;
+    Ok(())
+}
+
+/// Registers a vessel heard on the fleet with the tick task, its link
+/// being this member: commands are received and dropped.
+async fn register(app: &AppState, id: &str, actuator: ActuatorDocument, pose: PoseDocument) -> Option<Heard> {
+    let link = app.next_link.fetch_add(1, Ordering::Relaxed);
+    let (tx, mut drained) = mpsc::channel(16);
+    let (poses, slot) = watch::channel(Some(pose));
+    let (reply, answer) = oneshot::channel();
+    app.requests
+        .send(Request::Register {
+            id: id.to_string(),
+            link,
+            actuator: Some(actuator),
+            astern: true,
+            agility: None,
+            tx,
+            poses: slot,
+            reply,
+        })
+        .await
+        .ok()?;
+    match answer.await {
+        Ok(Ok(_)) => {
+            // The member sends no commands: the tick's are dropped here.
+            app.tracker.spawn(async move { while drained.recv().await.is_some() {} });
+            tracing::info!(vessel = id, "peer vessel heard");
+            Some(Heard { link, poses })
+        }
+        Ok(Err(e)) => {
+            tracing::warn!(vessel = id, error = %e, "peer vessel not shown");
+            None
+        }
+        Err(_) => None,
+    }
+}
