@@ -177,7 +177,7 @@ function drawTable(snap) {
     body.dataset.ids = ids;
     body.innerHTML = snap.vessels
       .map((v) => `<tr data-vessel-id="${escape(v.id)}"><td>${escape(v.id)}</td><td></td>`
-        + '<td class="num"></td><td class="num"></td><td class="num"></td></tr>')
+        + '<td class="num"></td><td class="num"></td><td class="num"></td><td class="num"></td></tr>')
       .join("");
   }
   snap.vessels.forEach((v, i) => {
@@ -194,6 +194,7 @@ function drawTable(snap) {
     cells[2].textContent = v.last_command ? v.last_command.E.toFixed(2) : "–";
     cells[3].textContent = v.pose ? Math.hypot(v.pose.u, v.pose.v).toFixed(2) : "–";
     cells[4].textContent = v.last_seen == null ? "never" : Math.max(0, snap.time - v.last_seen).toFixed(1);
+    cells[5].textContent = v.neighbours == null ? "–" : String(v.neighbours);
     row.classList.toggle("selected", v.id === state.selectedVessel);
   });
   $("vessel-count").textContent = `(${snap.vessels.length})`;

@@ -651,9 +651,15 @@ pub struct VesselStatusDocument {
     pub centroid: Option<XY>,
     #[schema(required = true)]
     pub last_command: Option<CommandDocument>,
-    /// Mission time of the newest pose [s].
+    /// Mission time of the newest pose [s] (in a peer fleet, of the
+    /// newest beacon).
     #[schema(required = true)]
     pub last_seen: Option<f64>,
+    /// In a peer fleet shown by `serve --peer`: the neighbours in the
+    /// vessel's own partition, as it reports them; absent for a vessel on
+    /// a link.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub neighbours: Option<u32>,
 }
 
 /// `GET /api/v1/coverage`.

@@ -162,9 +162,36 @@ pub async fn run(
     // Vessels the tick task refused (another β, a full fleet), with the
     // actuator they had: asked again only when it changes.
     let mut refused: BTreeMap<String, (f64, f64)> = BTreeMap::new();
+    // Each vessel's own neighbour count, asked of the fleet every second.
+    let mut ask = tokio::time::interval(Duration::from_secs(1));
+    ask.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+    let (counts_tx, mut counts) = mpsc::channel::<BTreeMap<String, u32>>(2);
     loop {
         tokio::select! {
             _ = shutdown.cancelled() => break,
+            _ = ask.tick() => {
+                let (session, selector, tx) = (session.clone(), keys.status_all(), counts_tx.clone());
+                // Off this loop: a query waits for its replies.
+                app.tracker.spawn(async move {
+                    let Ok(replies) = session.get(selector).timeout(Duration::from_millis(800)).await else {
+                        return;
+                    };
+                    let mut found = BTreeMap::new();
+                    while let Ok(reply) = replies.recv_async().await {
+                        if let Ok(sample) = reply.result()
+                            && let Ok(doc) = serde_json::from_slice::<crate::protocol::peer::PeerStatusDocument>(&sample.payload().to_bytes())
+                        {
+                            found.insert(doc.id, doc.neighbours as u32);
+                        }
+                    }
+                    let _ = tx.try_send(found);
+                });
+            }
+            Some(found) = counts.recv() => {
+                if !found.is_empty() {
+                    let _ = app.requests.send(Request::PeerNeighbours(found)).await;
+                }
+            }
             Ok(()) = snapshots.changed() => {
                 let mission = snapshots.borrow_and_update().document.mission.clone();
                 if mission != last {

@@ -156,6 +156,7 @@ pub fn snapshot_at(recording: &Recording, at: u64) -> Result<Option<Snapshot>, R
                 centroid: cell.map(|c| c.centroid),
                 last_command: commands.get(&v.id).cloned(),
                 last_seen: v.last_seen,
+                neighbours: None,
             }
         })
         .collect();
@@ -324,7 +325,7 @@ async fn refuse_writes(mut requests: mpsc::Receiver<Request>, shutdown: Cancella
             Request::Forget { reply, .. } => {
                 let _ = reply.send(Err(refusal()));
             }
-            Request::Gone { .. } => {}
+            Request::Gone { .. } | Request::PeerNeighbours(_) => {}
         }
     }
 }

@@ -138,6 +138,7 @@ pub fn record(
                     psi_e: c.psi_e,
                 }),
                 last_seen: Some(tick.t),
+                neighbours: None,
             });
         }
         let snapshot = Snapshot {

@@ -81,6 +81,8 @@ pub enum Request {
         id: String,
         reply: oneshot::Sender<Result<(), ApiError>>,
     },
+    /// A peer fleet's vessels' own neighbour counts (`serve --peer`).
+    PeerNeighbours(BTreeMap<String, u32>),
     /// An operator's change to the mission; the reply is the changed
     /// document's new state.
     Change {
@@ -154,6 +156,8 @@ struct Entry {
     last_seen_tick: Option<u64>,
     guidance: Guidance,
     last_command: Option<CommandDocument>,
+    /// Its own neighbour count, when it is a peer fleet's vessel.
+    neighbours: Option<u32>,
 }
 
 /// Takes a link's pose into its entry when the link has sent a new one since
@@ -416,6 +420,7 @@ impl Coordinator {
                     last_seen_tick: None,
                     guidance: Guidance::new(gains),
                     last_command: None,
+                    neighbours: None,
                 });
                 if let Some(old) = entry.link.take() {
                     let _ = old.tx.try_send(
@@ -470,6 +475,14 @@ impl Coordinator {
                 }
                 let _ = reply.send(outcome);
                 changed
+            }
+            Request::PeerNeighbours(counts) => {
+                for (id, n) in counts {
+                    if let Some(entry) = self.vessels.get_mut(&id) {
+                        entry.neighbours = Some(n);
+                    }
+                }
+                false
             }
             Request::Forget { id, reply } => {
                 let outcome = match self.vessels.remove(&id) {

@@ -282,6 +282,7 @@ impl Coordinator {
                     centroid: cell.map(|c| c.centroid),
                     last_command: e.last_command.clone(),
                     last_seen: e.last_seen_tick.map(|t| t as f64 / self.mission.tick_hz),
+                    neighbours: e.neighbours,
                 }
             })
             .collect();
