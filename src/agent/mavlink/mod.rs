@@ -62,6 +62,10 @@ pub struct BridgeConfig {
     pub sysid: u8,
     /// How often the mission's origin is read again.
     pub origin_poll: Duration,
+    /// Be each boat's peer node instead of linking it to a coordinator
+    /// (`agent --mavlink … --peer`): the mission, its origin and the
+    /// commands come from the boat's own loop on board.
+    pub peer: Option<Arc<crate::agent::peer::node::Member>>,
 }
 
 /// Why the bridge could not start.
@@ -195,27 +199,57 @@ fn frame_of(origin: OriginDocument) -> Result<LocalFrame, BridgeError> {
 /// Runs the bridge until `shutdown`. Fails only at start: a coordinator
 /// that cannot be read, a mission without an origin, a malformed endpoint.
 pub async fn run(config: BridgeConfig, shutdown: CancellationToken) -> Result<(), BridgeError> {
-    let url = link::link_url(&config.server)
-        .filter(|_| config.server.starts_with("http"))
-        .ok_or_else(|| BridgeError::Server(config.server.clone()))?;
     for e in &config.endpoints {
         mavlink::ConnectionAddress::parse_address(e).map_err(|source| BridgeError::Endpoint {
             endpoint: e.clone(),
             source,
         })?;
     }
-    let http = reqwest::Client::builder()
-        .timeout(Duration::from_secs(5))
-        .build()
-        .expect("a plain HTTP client builds");
-    let origin = fetch_origin(&http, &config)
-        .await?
-        .ok_or(BridgeError::NoOrigin)?;
-    let (frames, frame) = watch::channel(frame_of(origin)?);
-    tracing::info!(lat = origin.lat, lon = origin.lon, "mission origin");
+    let tasks = TaskTracker::new();
+    let (url, frames, frame) = match &config.peer {
+        None => {
+            let url = link::link_url(&config.server)
+                .filter(|_| config.server.starts_with("http"))
+                .ok_or_else(|| BridgeError::Server(config.server.clone()))?;
+            let http = reqwest::Client::builder()
+                .timeout(Duration::from_secs(5))
+                .build()
+                .expect("a plain HTTP client builds");
+            let origin = fetch_origin(&http, &config)
+                .await?
+                .ok_or(BridgeError::NoOrigin)?;
+            let (frames, frame) = watch::channel(frame_of(origin)?);
+            tracing::info!(lat = origin.lat, lon = origin.lon, "mission origin");
+            tasks.spawn(follow_origin(http, config.clone(), frames, shutdown.clone()));
+            (url, None, frame)
+        }
+        Some(member) => {
+            // The fleet's mission gives the origin; the boats wait for it.
+            let mut missions = member.missions();
+            let origin = loop {
+                let origin = missions.borrow_and_update().as_ref().map(|r| r.mission.origin);
+                match origin {
+                    Some(Some(o)) => break o,
+                    Some(None) => return Err(BridgeError::NoOrigin),
+                    None => {
+                        tracing::info!("waiting for the fleet's mission (its origin places the boats)");
+                        tokio::select! {
+                            _ = shutdown.cancelled() => return Ok(()),
+                            changed = missions.changed() => if changed.is_err() { return Ok(()) },
+                        }
+                    }
+                }
+            };
+            let (frames, frame) = watch::channel(frame_of(origin)?);
+            tracing::info!(lat = origin.lat, lon = origin.lon, "mission origin, from the fleet");
+            (String::new(), Some((frames, missions)), frame)
+        }
+    };
+    if let Some((frames, missions)) = frames {
+        tasks.spawn(follow_fleet_origin(missions, frames, shutdown.clone()));
+    }
 
     let tally = Arc::new(Tally::default());
-    let tasks = TaskTracker::new();
     let (incoming_tx, mut incoming) = mpsc::channel::<Incoming>(1024);
     let mut connections: Vec<Current> = Vec::new();
     for (i, address) in config.endpoints.iter().enumerate() {
@@ -234,12 +268,6 @@ pub async fn run(config: BridgeConfig, shutdown: CancellationToken) -> Result<()
     tasks.spawn(heartbeats(
         connections.clone(),
         config.sysid,
-        shutdown.clone(),
-    ));
-    tasks.spawn(follow_origin(
-        http,
-        config.clone(),
-        frames,
         shutdown.clone(),
     ));
 
@@ -378,6 +406,7 @@ fn route(
         connections[m.endpoint].clone(),
         config.sysid,
         tally.clone(),
+        config.peer.clone(),
         shutdown.clone(),
     ));
     vehicles.insert(
@@ -425,6 +454,7 @@ async fn run_vehicle(
     connection: Current,
     sysid: u8,
     tally: Arc<Tally>,
+    peer: Option<Arc<crate::agent::peer::node::Member>>,
     shutdown: CancellationToken,
 ) {
     let vessel = link_config.vessel.clone();
@@ -455,7 +485,11 @@ async fn run_vehicle(
                             if pose.is_some() {
                                 poses.send_replace(pose);
                                 if let Some((config, slot, tx)) = link.take() {
-                                    link_task = Some(tokio::spawn(link::run(config, slot, tx, stop.clone())));
+                                    link_task = Some(match &peer {
+                                        None => tokio::spawn(link::run(config, slot, tx, stop.clone())),
+                                        // A peer node: the boat's own loop on board.
+                                        Some(m) => tokio::spawn(m.clone().link(config.vessel.clone(), slot, tx, stop.clone())),
+                                    });
                                 }
                             }
                             out
@@ -625,6 +659,31 @@ async fn follow_origin(
                 tracing::warn!("the mission no longer has an origin; keeping the previous one")
             }
             Err(e) => tracing::debug!(error = %e, "origin not read this time"),
+        }
+    }
+}
+
+/// In a peer fleet: the origin of each new mission revision reaches every
+/// vehicle's task.
+async fn follow_fleet_origin(
+    mut missions: watch::Receiver<Option<Arc<crate::agent::peer::board::Revision>>>,
+    frames: watch::Sender<LocalFrame>,
+    shutdown: CancellationToken,
+) {
+    loop {
+        tokio::select! {
+            _ = shutdown.cancelled() => return,
+            changed = missions.changed() => if changed.is_err() { return },
+        }
+        let origin = missions.borrow_and_update().as_ref().and_then(|r| r.mission.origin);
+        match origin.map(frame_of) {
+            Some(Ok(f)) if f != *frames.borrow() => {
+                tracing::info!("the mission's origin moved");
+                frames.send_replace(f);
+            }
+            Some(Ok(_)) => {}
+            Some(Err(e)) => tracing::warn!(error = %e, "keeping the previous origin"),
+            None => tracing::warn!("the mission no longer has an origin; keeping the previous one"),
         }
     }
 }

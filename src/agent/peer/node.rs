@@ -71,94 +71,100 @@ impl Shared {
     }
 }
 
-/// Runs `vessels` as members of the peer fleet until `shutdown`.
-pub async fn run(
-    config: PeerConfig,
-    vessels: Vec<VesselConfig>,
-    shutdown: CancellationToken,
-) -> Result<(), PeerError> {
-    let zconfig = config.zenoh.config()?;
-    let session = zenoh::open(zconfig)
-        .await
-        .map_err(|e| PeerError::Zenoh(e.to_string()))?;
-    let keys = Keys {
-        fleet: config.fleet.clone(),
-    };
-    let (mission_tx, _) = watch::channel(None);
-    let shared = Arc::new(Shared {
-        keys: keys.clone(),
-        table: Mutex::new(Table::new(
-            &config.fleet,
-            vessels.iter().map(|v| v.id.clone()),
-        )),
-        board: Mutex::new(Board::default()),
-        mission: mission_tx,
-        sent: Mutex::new(BTreeMap::new()),
-        config: config.clone(),
-    });
-    if let Some(doc) = &config.mission {
-        let bytes = serde_json::to_vec(doc).expect("documents serialize");
-        shared.offer_mission(&bytes);
+/// This process's membership of a peer fleet: its Zenoh session and what
+/// the fleet-wide declarations (running in the background until the
+/// session closes) share with its vessels.
+pub struct Member {
+    session: zenoh::Session,
+    shared: Arc<Shared>,
+}
+
+impl std::fmt::Debug for Member {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Member")
+            .field("fleet", &self.shared.keys.fleet)
+            .field("zid", &self.session.zid())
+            .finish()
     }
-    tracing::info!(
-        fleet = %config.fleet,
-        zid = %session.zid(),
-        vessels = vessels.len(),
-        "peer node up"
-    );
-    let zerr = |e: zenoh::Error| PeerError::Zenoh(e.to_string());
+}
 
-    let s = shared.clone();
-    let _beacons = session
-        .declare_subscriber(Keys::all_beacons())
-        .callback(move |sample| {
-            let key = sample.key_expr().as_str();
-            let bytes = sample.payload().to_bytes();
-            let local = wire::Keys::parse_beacon(key).is_some_and(|(_, id)| {
-                s.sent.lock().expect("sent lock").get(id).map(|b| b.as_slice()) == Some(&bytes[..])
-            });
-            let ageing = s.config.ageing;
-            s.table.lock().expect("table lock").offer(
-                key,
-                &bytes,
-                local,
-                Instant::now(),
-                utc_now(),
-                &ageing,
-            );
-        })
-        .await
-        .map_err(zerr)?;
-    let s = shared.clone();
-    let _missions = session
-        .declare_subscriber(keys.mission())
-        .callback(move |sample| s.offer_mission(&sample.payload().to_bytes()))
-        .await
-        .map_err(zerr)?;
-    let s = shared.clone();
-    let mission_key = keys.mission();
-    let _mission_queryable = session
-        .declare_queryable(keys.mission())
-        .callback(move |query| {
-            let current = s.board.lock().expect("board lock").current();
-            if let Some(rev) = current {
-                let _ = query.reply(&mission_key, rev.json.as_slice()).wait();
-            }
-        })
-        .await
-        .map_err(zerr)?;
-
-    let tasks = TaskTracker::new();
-    // Until a mission is held, ask the fleet for it every second.
-    {
-        let (s, session, stop) = (shared.clone(), session.clone(), shutdown.clone());
+impl Member {
+    /// Opens the session and declares what every vessel of this process
+    /// shares: every fleet's beacons, the mission key and its queryable;
+    /// until a mission is held it asks the fleet for one every second.
+    /// `own` are the ids this process's vessels use (more may be claimed).
+    pub async fn join(
+        config: PeerConfig,
+        own: impl IntoIterator<Item = String>,
+        tasks: &TaskTracker,
+        shutdown: &CancellationToken,
+    ) -> Result<Arc<Member>, PeerError> {
+        let zerr = |e: zenoh::Error| PeerError::Zenoh(e.to_string());
+        let session = zenoh::open(config.zenoh.config()?).await.map_err(zerr)?;
+        let keys = Keys {
+            fleet: config.fleet.clone(),
+        };
+        let (mission_tx, _) = watch::channel(None);
+        let shared = Arc::new(Shared {
+            keys: keys.clone(),
+            table: Mutex::new(Table::new(&config.fleet, own)),
+            board: Mutex::new(Board::default()),
+            mission: mission_tx,
+            sent: Mutex::new(BTreeMap::new()),
+            config: config.clone(),
+        });
+        if let Some(doc) = &config.mission {
+            let bytes = serde_json::to_vec(doc).expect("documents serialize");
+            shared.offer_mission(&bytes);
+        }
+        tracing::info!(fleet = %config.fleet, zid = %session.zid(), "joined the peer fleet");
+        let s = shared.clone();
+        session
+            .declare_subscriber(Keys::all_beacons())
+            .callback(move |sample| {
+                let key = sample.key_expr().as_str();
+                let bytes = sample.payload().to_bytes();
+                let local = wire::Keys::parse_beacon(key).is_some_and(|(_, id)| {
+                    s.sent.lock().expect("sent lock").get(id).map(|b| b.as_slice())
+                        == Some(&bytes[..])
+                });
+                let ageing = s.config.ageing;
+                s.table.lock().expect("table lock").offer(
+                    key,
+                    &bytes,
+                    local,
+                    Instant::now(),
+                    utc_now(),
+                    &ageing,
+                );
+            })
+            .background()
+            .await
+            .map_err(zerr)?;
+        let s = shared.clone();
+        session
+            .declare_subscriber(keys.mission())
+            .callback(move |sample| s.offer_mission(&sample.payload().to_bytes()))
+            .background()
+            .await
+            .map_err(zerr)?;
+        let s = shared.clone();
+        let mission_key = keys.mission();
+        session
+            .declare_queryable(keys.mission())
+            .callback(move |query| {
+                let current = s.board.lock().expect("board lock").current();
+                if let Some(rev) = current {
+                    let _ = query.reply(&mission_key, rev.json.as_slice()).wait();
+                }
+            })
+            .background()
+            .await
+            .map_err(zerr)?;
+        let (s, z, stop) = (shared.clone(), session.clone(), shutdown.clone());
         tasks.spawn(async move {
             while s.mission.borrow().is_none() && !stop.is_cancelled() {
-                if let Ok(replies) = session
-                    .get(s.keys.mission())
-                    .timeout(Duration::from_secs(1))
-                    .await
-                {
+                if let Ok(replies) = z.get(s.keys.mission()).timeout(Duration::from_secs(1)).await {
                     while let Ok(reply) = replies.recv_async().await {
                         if let Ok(sample) = reply.result() {
                             s.offer_mission(&sample.payload().to_bytes());
@@ -171,129 +177,293 @@ pub async fn run(
                 }
             }
         });
+        Ok(Arc::new(Member { session, shared }))
     }
-    for vessel in vessels {
-        let (s, session, stop) = (shared.clone(), session.clone(), shutdown.clone());
-        tasks.spawn(async move {
-            if let Err(e) = run_vessel(s, session, vessel.clone(), stop).await {
-                tracing::error!(vessel = %vessel.id, error = %e, "peer vessel stopped");
+
+    /// The mission revisions as this member takes them.
+    pub fn missions(&self) -> watch::Receiver<Option<Arc<Revision>>> {
+        self.shared.mission.subscribe()
+    }
+
+    /// Claims `id` for a vessel of this process: a beacon of that id from
+    /// anywhere else is then an id conflict.
+    pub fn claim(&self, id: &str) {
+        self.shared.table.lock().expect("table lock").claim(id);
+    }
+
+    /// Leaves the fleet.
+    pub async fn close(&self) {
+        let _ = self.session.close().await;
+    }
+
+    /// A vessel whose hull is elsewhere (an autopilot behind the MAVLink
+    /// bridge): its newest pose in `poses` (local plane), its commands out
+    /// on `commands`, the same beacons, loop and rules as a simulated one.
+    /// Without a mission, or without a pose newer than [`POSE_STALE`], it
+    /// commands nothing, so the autopilot's own timeout stops the boat.
+    pub async fn link(
+        self: Arc<Self>,
+        id: String,
+        mut poses: watch::Receiver<Option<crate::protocol::PoseDocument>>,
+        commands: tokio::sync::mpsc::Sender<crate::agent::link::Inbound>,
+        stop: CancellationToken,
+    ) {
+        self.claim(&id);
+        let Ok(mut v) = Declared::new(&self, &id).await else {
+            tracing::error!(vessel = %id, "could not declare the vessel on the fleet");
+            return;
+        };
+        let started = Instant::now();
+        let mut pose: Option<(crate::protocol::PoseDocument, Instant)> = None;
+        let mut beacons = tokio::time::interval(Duration::from_secs_f64(1.0 / self.shared.config.beacon_hz));
+        beacons.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+        let mut control = tokio::time::interval(Duration::from_millis(100));
+        control.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+        loop {
+            tokio::select! {
+                _ = stop.cancelled() => break,
+                changed = poses.changed() => {
+                    if changed.is_err() { break }
+                    if let Some(p) = poses.borrow_and_update().clone() {
+                        pose = Some((p, Instant::now()));
+                    }
+                }
+                Ok(()) = v.missions.changed() => v.take_mission(),
+                Ok(query) = v.status.recv_async() => v.answer(&self.shared, query).await,
+                _ = beacons.tick() => {
+                    if let Some((p, at)) = &pose && at.elapsed() < POSE_STALE {
+                        let controlled = p.controlled.unwrap_or(true) && v.current.is_some();
+                        v.beacon(&self.shared, &state_of_pose(p), controlled).await;
+                    }
+                }
+                _ = control.tick() => {
+                    let fresh = pose.as_ref().filter(|(_, at)| at.elapsed() < POSE_STALE);
+                    if let Some((p, _)) = fresh
+                        && let Some(command) = v.step(&self.shared, &state_of_pose(p), started.elapsed().as_secs_f64())
+                    {
+                        let _ = commands.try_send(crate::agent::link::Inbound::Command(command));
+                    }
+                }
             }
-        });
+        }
+    }
+
+    /// A simulated vessel: its hull on board, driven by its own loop.
+    pub async fn simulate(self: Arc<Self>, vessel: VesselConfig, stop: CancellationToken) {
+        if let Err(e) = run_vessel(self.shared.clone(), self.session.clone(), vessel.clone(), stop).await {
+            tracing::error!(vessel = %vessel.id, error = %e, "peer vessel stopped");
+        }
+    }
+}
+
+/// A pose older than this is not announced nor steered by.
+pub const POSE_STALE: Duration = Duration::from_secs(2);
+
+fn state_of_pose(p: &crate::protocol::PoseDocument) -> crate::control::model::State {
+    crate::control::model::State {
+        x: p.x,
+        y: p.y,
+        psi: p.psi,
+        vel: crate::control::Vec3::new(p.u, p.v, p.r),
+    }
+}
+
+/// Runs `vessels` as members of the peer fleet until `shutdown`.
+pub async fn run(
+    config: PeerConfig,
+    vessels: Vec<VesselConfig>,
+    shutdown: CancellationToken,
+) -> Result<(), PeerError> {
+    let tasks = TaskTracker::new();
+    let member = Member::join(config, vessels.iter().map(|v| v.id.clone()), &tasks, &shutdown).await?;
+    tracing::info!(vessels = vessels.len(), "peer vessels starting");
+    for vessel in vessels {
+        tasks.spawn(member.clone().simulate(vessel, shutdown.clone()));
     }
     tasks.close();
     tasks.wait().await;
-    let _ = session.close().await;
+    member.close().await;
     Ok(())
 }
 
-/// One vessel: token, publisher, status queryable, hull and loop.
+/// One vessel's declarations on the fleet and its loop's state: what a
+/// simulated hull and an autopilot's link share.
+struct Declared {
+    id: String,
+    _token: zenoh::liveliness::LivelinessToken,
+    publisher: zenoh::pubsub::Publisher<'static>,
+    status: zenoh::query::Queryable<zenoh::handlers::FifoChannelHandler<zenoh::query::Query>>,
+    missions: watch::Receiver<Option<Arc<Revision>>>,
+    current: Option<Arc<Revision>>,
+    guidance: Option<Guidance>,
+    scratch: Scratch,
+    seq: u16,
+    ticks: u64,
+    partition: usize,
+    controlled: bool,
+}
+
+impl Declared {
+    async fn new(member: &Member, id: &str) -> Result<Declared, PeerError> {
+        let zerr = |e: zenoh::Error| PeerError::Zenoh(e.to_string());
+        let (session, keys) = (&member.session, &member.shared.keys);
+        let token = session
+            .liveliness()
+            .declare_token(keys.alive(id))
+            .await
+            .map_err(zerr)?;
+        let publisher = session
+            .declare_publisher(keys.beacon(id))
+            .congestion_control(CongestionControl::Drop)
+            .express(true)
+            .await
+            .map_err(zerr)?;
+        let status = session
+            .declare_queryable(keys.status(id))
+            .await
+            .map_err(zerr)?;
+        let mut missions = member.shared.mission.subscribe();
+        let current = missions.borrow_and_update().clone();
+        let guidance = current.as_ref().map(|r| Guidance::new(r.mission.guidance));
+        tracing::info!(vessel = %id, fleet = %keys.fleet, "peer vessel joined");
+        Ok(Declared {
+            id: id.to_string(),
+            _token: token,
+            publisher,
+            status,
+            missions,
+            current,
+            guidance,
+            scratch: Scratch::default(),
+            seq: 0,
+            ticks: 0,
+            partition: 0,
+            controlled: false,
+        })
+    }
+
+    fn take_mission(&mut self) {
+        self.current = self.missions.borrow_and_update().clone();
+        self.guidance = self
+            .current
+            .as_ref()
+            .map(|r| Guidance::new(r.mission.guidance));
+    }
+
+    async fn answer(&self, shared: &Shared, query: zenoh::query::Query) {
+        let doc = status_document(shared, &self.id, &self.current, self.controlled, self.partition);
+        let json = serde_json::to_vec(&doc).expect("documents serialize");
+        let _ = query.reply(shared.keys.status(&self.id), json).await;
+    }
+
+    /// The actuator it announces and computes with: the mission's as the
+    /// wire carries it; before it has a mission, the paper's default.
+    fn actuator(&self) -> (f64, f64) {
+        match &self.current {
+            Some(r) => wire::wire_actuator(r.mission.actuator.k, r.mission.actuator.beta),
+            None => wire::wire_actuator(
+                crate::coverage::fleet::DEFAULT_K,
+                crate::coverage::fleet::DEFAULT_BETA,
+            ),
+        }
+    }
+
+    /// One tick of the loop on board at mission time `t`; `None` without a
+    /// mission (the vessel then holds).
+    fn step(&mut self, shared: &Shared, own: &crate::control::model::State, t: f64) -> Option<crate::protocol::CommandDocument> {
+        let actuator = self.actuator();
+        let (Some(rev), Some(g)) = (&self.current, self.guidance.as_mut()) else {
+            self.controlled = false;
+            return None;
+        };
+        let neighbours = shared
+            .table
+            .lock()
+            .expect("table lock")
+            .neighbours(&self.id, Instant::now(), &shared.config.ageing);
+        let step = super::step::step(&rev.mission, own, actuator, &neighbours, g, t, self.ticks, &mut self.scratch);
+        self.ticks += 1;
+        self.partition = step.partition;
+        Some(step.command)
+    }
+
+    /// Publishes the beacon of `s`: express and dropped on congestion, so
+    /// it never waits on a slow link.
+    async fn beacon(&mut self, shared: &Shared, s: &crate::control::model::State, controlled: bool) {
+        self.controlled = controlled;
+        let (k, beta) = self.actuator();
+        let doc = BeaconDocument {
+            id: self.id.clone(),
+            seq: self.seq,
+            t: utc_now(),
+            x: s.x,
+            y: s.y,
+            psi: s.psi,
+            u: s.vel.x,
+            v: s.vel.y,
+            r: s.vel.z,
+            k,
+            beta,
+            rev: self.current.as_ref().map_or(0, |r| r.revision),
+            controlled,
+        };
+        self.seq = self.seq.wrapping_add(1);
+        let bytes = wire::encode(&doc);
+        shared
+            .sent
+            .lock()
+            .expect("sent lock")
+            .insert(self.id.clone(), bytes.clone());
+        if let Err(e) = self.publisher.put(bytes).await {
+            tracing::debug!(vessel = %self.id, error = %e, "beacon not sent");
+        }
+    }
+}
+
+/// One simulated vessel: its declarations, hull and loop.
 async fn run_vessel(
     shared: Arc<Shared>,
     session: zenoh::Session,
     vessel: VesselConfig,
     shutdown: CancellationToken,
 ) -> Result<(), PeerError> {
-    let zerr = |e: zenoh::Error| PeerError::Zenoh(e.to_string());
-    let keys = &shared.keys;
+    let member = Member {
+        session,
+        shared: shared.clone(),
+    };
+    let mut v = Declared::new(&member, &vessel.id).await?;
     let config = &shared.config;
-    let id = vessel.id.clone();
-    let _token = session
-        .liveliness()
-        .declare_token(keys.alive(&id))
-        .await
-        .map_err(zerr)?;
-    let publisher = session
-        .declare_publisher(keys.beacon(&id))
-        .congestion_control(CongestionControl::Drop)
-        .express(true)
-        .await
-        .map_err(zerr)?;
-    let status = session
-        .declare_queryable(keys.status(&id))
-        .await
-        .map_err(zerr)?;
     let mut onboard = Onboard::new(&vessel);
-    let mut missions = shared.mission.subscribe();
-    let mut current: Option<Arc<Revision>> = missions.borrow_and_update().clone();
-    let mut guidance = current.as_ref().map(|r| Guidance::new(r.mission.guidance));
-    let mut scratch = Scratch::default();
-    let mut seq: u16 = 0;
-    let mut partition = 0usize;
-    let mut ticks: u64 = 0;
     let period = 0.05; // the hull's step between looks at the world [s]
     let beacon_every = 1.0 / config.beacon_hz;
     let (mut next_beacon, mut next_control) = (0.0, 0.0);
-    let mut ticker =
-        tokio::time::interval(Duration::from_secs_f64(period / config.time_warp));
+    let mut ticker = tokio::time::interval(Duration::from_secs_f64(period / config.time_warp));
     ticker.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
-    tracing::info!(vessel = %id, fleet = %keys.fleet, "peer vessel joined");
     loop {
         tokio::select! {
             _ = shutdown.cancelled() => break,
-            Ok(()) = missions.changed() => {
-                current = missions.borrow_and_update().clone();
-                guidance = current.as_ref().map(|r| Guidance::new(r.mission.guidance));
-            }
-            Ok(query) = status.recv_async() => {
-                let doc = status_document(&shared, &id, &current, onboard.command.is_some() && current.is_some(), partition);
-                let json = serde_json::to_vec(&doc).expect("documents serialize");
-                let _ = query.reply(keys.status(&id), json).await;
-            }
+            Ok(()) = v.missions.changed() => v.take_mission(),
+            Ok(query) = v.status.recv_async() => v.answer(&shared, query).await,
             _ = ticker.tick() => {
                 onboard.advance(period);
                 let t = onboard.t;
-                let actuator = current.as_ref().map(|r| wire::wire_actuator(r.mission.actuator.k, r.mission.actuator.beta));
                 if t + 1e-9 >= next_control {
-                    if let (Some(rev), Some(g), Some(act)) = (&current, guidance.as_mut(), actuator) {
-                        next_control = t + 1.0 / rev.mission.tick_hz;
-                        let neighbours = {
-                            let mut table = shared.table.lock().expect("table lock");
-                            table.neighbours(&id, Instant::now(), &config.ageing)
-                        };
-                        let step = super::step::step(&rev.mission, &onboard.state, act, &neighbours, g, t, ticks, &mut scratch);
-                        ticks += 1;
-                        partition = step.partition;
-                        onboard.command = Some((step.command, t));
-                    } else {
-                        next_control = t + 0.1;
+                    let hz = v.current.as_ref().map_or(10.0, |r| r.mission.tick_hz);
+                    next_control = t + 1.0 / hz;
+                    if let Some(command) = v.step(&shared, &onboard.state, t) {
+                        onboard.command = Some((command, t));
                     }
                 }
                 if t + 1e-9 >= next_beacon {
                     next_beacon = t + beacon_every;
-                    // Before it has a mission a vessel announces the
-                    // default actuator (the paper's), and that it holds.
-                    let (k, beta) = actuator.unwrap_or_else(|| {
-                        wire::wire_actuator(crate::coverage::fleet::DEFAULT_K, crate::coverage::fleet::DEFAULT_BETA)
-                    });
-                    let s = &onboard.state;
-                    let controlled = current.is_some();
-                    let doc = BeaconDocument {
-                        id: id.clone(),
-                        seq,
-                        t: utc_now(),
-                        x: s.x,
-                        y: s.y,
-                        psi: s.psi,
-                        u: s.vel.x,
-                        v: s.vel.y,
-                        r: s.vel.z,
-                        k,
-                        beta,
-                        rev: current.as_ref().map_or(0, |r| r.revision),
-                        controlled,
-                    };
-                    seq = seq.wrapping_add(1);
-                    let bytes = wire::encode(&doc);
-                    shared.sent.lock().expect("sent lock").insert(id.clone(), bytes.clone());
-                    // Express and dropped on congestion: never waits on a slow link.
-                    if let Err(e) = publisher.put(bytes).await {
-                        tracing::debug!(vessel = %id, error = %e, "beacon not sent");
-                    }
+                    let controlled = v.current.is_some();
+                    let state = onboard.state;
+                    v.beacon(&shared, &state, controlled).await;
                 }
             }
         }
     }
-    tracing::info!(vessel = %id, "peer vessel left");
+    tracing::info!(vessel = %vessel.id, "peer vessel left");
     Ok(())
 }
 

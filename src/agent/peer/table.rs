@@ -111,6 +111,11 @@ impl Table {
         }
     }
 
+    /// Claims `id` for one of this process's vessels.
+    pub fn claim(&mut self, id: &str) {
+        self.own.insert(id.to_string());
+    }
+
     pub fn refuse(&mut self, why: Refusal) {
         *self.refused.entry(why).or_default() += 1;
     }

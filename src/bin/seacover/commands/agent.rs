@@ -75,9 +75,7 @@ pub struct Args {
 }
 
 pub async fn run(args: Args) -> anyhow::Result<()> {
-    if args.peer && !args.mavlink.is_empty() {
-        anyhow::bail!("--peer with --mavlink (a bridge as a peer node) is not built yet")
-    } else if args.peer {
+    if args.peer && args.mavlink.is_empty() {
         peer(args).await
     } else if args.mavlink.is_empty() {
         simulate(args).await
@@ -124,6 +122,19 @@ async fn bridge(args: Args) -> anyhow::Result<()> {
             "--id must match [A-Za-z0-9_.-]{{1,64}}"
         );
     }
+    let stop = shell::stop_on_signal();
+    let tasks = tokio_util::task::TaskTracker::new();
+    // With --peer the bridge is each boat's peer node: one membership of
+    // the fleet for all the boats it bridges.
+    let peer = if args.peer {
+        let mut config = seacover::agent::peer::PeerConfig::new(args.fleet.clone(), args.zenoh.options())?;
+        if let Some(path) = &args.mission {
+            config.mission = Some(seacover::agent::peer::mission_file(path)?);
+        }
+        Some(seacover::agent::peer::node::Member::join(config, args.id.clone(), &tasks, &stop).await?)
+    } else {
+        None
+    };
     let config = seacover::agent::mavlink::BridgeConfig {
         server: args.server.unwrap_or_default(),
         endpoints: args.mavlink,
@@ -132,8 +143,16 @@ async fn bridge(args: Args) -> anyhow::Result<()> {
         id: args.id,
         sysid: args.mavlink_sysid,
         origin_poll: std::time::Duration::from_secs(2),
+        peer: peer.clone(),
     };
-    seacover::agent::mavlink::run(config, shell::stop_on_signal()).await?;
+    let result = seacover::agent::mavlink::run(config, stop.clone()).await;
+    stop.cancel();
+    tasks.close();
+    tasks.wait().await;
+    if let Some(member) = peer {
+        member.close().await;
+    }
+    result?;
     Ok(())
 }
 
