@@ -64,6 +64,8 @@ pub enum Entry {
     Event(EventRecord),
     /// `seacover sim`: a vessel's truth, disturbance and estimate.
     SimVessel(SimVesselRecord),
+    /// `serve --peer`: a peer fleet's beacon as it arrived.
+    Beacon(Box<super::messages::BeaconRecord>),
     /// Finish the file and stop.
     Finish,
 }

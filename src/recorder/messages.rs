@@ -35,6 +35,16 @@ pub const MAP_FIX_PREFIX: &str = "/seacover/map/fix/";
 /// `seacover sim` only: each vessel's true state, disturbance and the
 /// observer's estimate.
 pub const SIM_VESSEL: &str = "/seacover/sim/vessel";
+/// `serve --peer` only: every beacon of the peer fleet as it arrived.
+pub const PEER_BEACON: &str = "/seacover/peer/beacon";
+
+/// [`PEER_BEACON`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct BeaconRecord {
+    /// Mission time of reception [s].
+    pub time: f64,
+    pub beacon: crate::protocol::peer::BeaconDocument,
+}
 
 /// [`POSE`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]

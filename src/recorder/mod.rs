@@ -130,6 +130,16 @@ impl Recorder {
         }
     }
 
+    /// A peer fleet's beacon, received at mission time `time`.
+    pub fn beacon(&self, time: f64, beacon: &crate::protocol::peer::BeaconDocument) {
+        if self.tx.is_some() {
+            self.record(Entry::Beacon(Box::new(messages::BeaconRecord {
+                time,
+                beacon: beacon.clone(),
+            })));
+        }
+    }
+
     pub fn event(&self, event: EventRecord) {
         if self.tx.is_some() {
             self.record(Entry::Event(event));

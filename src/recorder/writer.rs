@@ -411,6 +411,12 @@ impl Writer {
                     &record,
                 )
             }
+            Entry::Beacon(record) => self.put(
+                messages::PEER_BEACON,
+                messages::spec::<messages::BeaconRecord>,
+                ns(record.time),
+                &*record,
+            ),
             Entry::Finish => Ok(()),
         }
     }

@@ -215,6 +215,7 @@ pub async fn run(
                             continue;
                         }
                     };
+                    app.recorder.beacon(app.clock.now(), &beacon);
                     let pose = PoseDocument {
                         t: beacon.t,
                         x: beacon.x,
