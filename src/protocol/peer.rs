@@ -20,16 +20,18 @@ use super::MissionDocument;
 /// One vessel's beacon, 5 times a second: a CBOR map (RFC 8949) with
 /// exactly these keys, in this order. Floats are sent in the shortest
 /// CBOR float that holds them to the precision given per field, so a
-/// beacon of an id of up to 6 characters is at most 96 bytes.
+/// beacon is at most 96 bytes for an id of up to 7 characters and a
+/// revision up to 255, or up to 6 characters and revisions up to 65 535
+/// (a peer node refuses longer ids).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct BeaconDocument {
-    /// The vessel's id (`[A-Za-z0-9_.-]{1,64}`; at most 6 characters keep
-    /// the beacon within 96 bytes).
+    /// The vessel's id (`[A-Za-z0-9_.-]{1,7}` in a peer fleet, so that the
+    /// beacon stays within 96 bytes).
     pub id: String,
-    /// Counts the vessel's beacons, modulo 65536 (so it costs at most 3
-    /// bytes); the receivers count gaps to measure loss.
-    pub seq: u16,
+    /// Counts the vessel's beacons, modulo 256 (at most 2 bytes): a
+    /// listener can count lost beacons over any gap shorter than 51 s.
+    pub seq: u8,
     /// The sender's UTC time when it sent the beacon [s since 1970].
     pub t: f64,
     /// Position in the mission's local plane [m] (to ~4 mm at 50 km: a

@@ -8,9 +8,9 @@
 //!
 //! Invariants: the password is 32 bytes of the operating system's random
 //! source, hex-encoded; the files are readable by their owner only
-//! (0600); the configuration names the dictionary relative to itself
-//! (`session` resolves it against the configuration's directory), so the
-//! directory can be copied to every boat as it is.
+//! (0600); the configuration names the dictionary by its absolute path
+//! (what any Zenoh program reads), and seacover also finds it next to the
+//! configuration when the directory was copied elsewhere (`session`).
 
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
@@ -25,6 +25,7 @@ pub const DICTIONARY: &str = "users.txt";
 /// configuration's path.
 pub fn write(dir: &Path, fleet: &str) -> std::io::Result<PathBuf> {
     std::fs::create_dir_all(dir)?;
+    let dir = &dir.canonicalize()?;
     let config = dir.join(CONFIG);
     if config.exists() {
         return Err(std::io::Error::new(
@@ -36,12 +37,15 @@ pub fn write(dir: &Path, fleet: &str) -> std::io::Result<PathBuf> {
     std::fs::File::open("/dev/urandom")?.read_exact(&mut bytes)?;
     let password: String = bytes.iter().map(|b| format!("{b:02x}")).collect();
     let user = format!("seacover-{fleet}");
-    private_file(&dir.join(DICTIONARY), &format!("{user}:{password}\n"))?;
+    let dictionary = dir.join(DICTIONARY);
+    private_file(&dictionary, &format!("{user}:{password}\n"))?;
+    let dictionary = dictionary.to_string_lossy();
     let json5 = format!(
         "// Zenoh configuration of the seacover fleet {fleet:?}: user/password\n\
          // authentication (Zenoh's usrpwd). Start every member with\n\
-         // --zenoh-config {CONFIG}; the dictionary is found next to this file.\n\
-         {{\n  transport: {{\n    auth: {{\n      usrpwd: {{\n        user: {user:?},\n        password: {password:?},\n        dictionary_file: {DICTIONARY:?},\n      }},\n    }},\n  }},\n}}\n"
+         // --zenoh-config {CONFIG}; seacover also finds the dictionary\n\
+         // next to this file when the directory is copied elsewhere.\n\
+         {{\n  transport: {{\n    auth: {{\n      usrpwd: {{\n        user: {user:?},\n        password: {password:?},\n        dictionary_file: {dictionary:?},\n      }},\n    }},\n  }},\n}}\n"
     );
     private_file(&config, &json5)?;
     Ok(config)

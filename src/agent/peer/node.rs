@@ -161,10 +161,19 @@ impl Member {
             .background()
             .await
             .map_err(zerr)?;
+        // Until a mission is held, and whenever a neighbour's beacon shows a
+        // newer revision than the one held (one published while this member
+        // was cut off), ask the fleet for it, at most once a second.
         let (s, z, stop) = (shared.clone(), session.clone(), shutdown.clone());
         tasks.spawn(async move {
-            while s.mission.borrow().is_none() && !stop.is_cancelled() {
-                if let Ok(replies) = z.get(s.keys.mission()).timeout(Duration::from_secs(1)).await {
+            while !stop.is_cancelled() {
+                let held = s.mission.borrow().as_ref().map(|r| r.revision);
+                let newest = s.table.lock().expect("table lock").newest_revision();
+                let behind = match held {
+                    None => true,
+                    Some(h) => newest.is_some_and(|n| n > h),
+                };
+                if behind && let Ok(replies) = z.get(s.keys.mission()).timeout(Duration::from_secs(1)).await {
                     while let Ok(reply) = replies.recv_async().await {
                         if let Ok(sample) = reply.result() {
                             s.offer_mission(&sample.payload().to_bytes());
@@ -297,7 +306,7 @@ struct Declared {
     current: Option<Arc<Revision>>,
     guidance: Option<Guidance>,
     scratch: Scratch,
-    seq: u16,
+    seq: u8,
     ticks: u64,
     partition: usize,
     controlled: bool,
@@ -305,6 +314,9 @@ struct Declared {
 
 impl Declared {
     async fn new(member: &Member, id: &str) -> Result<Declared, PeerError> {
+        if !wire::valid_peer_id(id) {
+            return Err(PeerError::Id(id.to_string()));
+        }
         let zerr = |e: zenoh::Error| PeerError::Zenoh(e.to_string());
         let (session, keys) = (&member.session, &member.shared.keys);
         let token = session

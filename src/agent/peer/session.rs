@@ -64,8 +64,9 @@ fn bad(e: impl std::fmt::Display) -> PeerError {
 }
 
 /// A relative `transport/auth/usrpwd/dictionary_file` is read next to the
-/// configuration file, not in the working directory, so a credentials
-/// directory works wherever it is copied.
+/// configuration file, not in the working directory, and so is an
+/// absolute one that does not exist but has a namesake there: a
+/// credentials directory works wherever it is copied.
 fn resolve_dictionary(config: &mut zenoh::Config, path: &std::path::Path) -> Result<(), PeerError> {
     const KEY: &str = "transport/auth/usrpwd/dictionary_file";
     let Ok(json) = config.get_json(KEY) else {
@@ -75,9 +76,11 @@ fn resolve_dictionary(config: &mut zenoh::Config, path: &std::path::Path) -> Res
         return Ok(());
     };
     let file = std::path::Path::new(&file);
-    if file.is_relative() {
-        let dir = path.parent().unwrap_or(std::path::Path::new("."));
-        let full = dir.join(file);
+    let dir = path.parent().unwrap_or(std::path::Path::new("."));
+    let beside = file.file_name().map(|name| dir.join(name));
+    let moved = file.is_absolute() && !file.exists() && beside.as_ref().is_some_and(|b| b.exists());
+    if file.is_relative() || moved {
+        let full = if moved { beside.expect("checked") } else { dir.join(file) };
         let value = serde_json::to_string(&full.to_string_lossy()).expect("strings serialize");
         config.insert_json5(KEY, &value).map_err(bad)?;
     }

@@ -131,6 +131,11 @@ impl Table {
         self.received
     }
 
+    /// The highest mission revision a vessel heard now works on.
+    pub fn newest_revision(&self) -> Option<u32> {
+        self.heard.values().map(|h| h.beacon.rev).max()
+    }
+
     /// Takes one sample from the beacon key `key`, received at `now` (and
     /// `now_utc`, s since 1970) from the network (`local` false), or from
     /// one of this process's own vessels.

@@ -2,11 +2,11 @@
 //! maps, mission documents as JSON, and every reason an input is refused.
 //!
 //! Invariants:
-//! - [`encode`] gives at most [`MAX_BEACON`] bytes for an id of up to 6
-//!   characters and a revision below 256, or 5 characters and below
-//!   65 536 (the tests check the worst cases): floats go out in the
+//! - [`encode`] gives at most [`MAX_BEACON`] bytes for an id of up to
+//!   [`MAX_ID`] characters and a revision below 256, or 6 characters and
+//!   below 65 536 (the tests check the worst cases): floats go out in the
 //!   shortest CBOR float that keeps the precision each field documents
-//!   (`protocol::peer::BeaconDocument`), and `seq` counts modulo 65536;
+//!   (`protocol::peer::BeaconDocument`), and `seq` counts modulo 256;
 //! - [`decode`] accepts only what [`encode`] could have made of a real
 //!   vessel: a map with exactly the beacon's keys, finite values, a
 //!   position within [`MAX_POSITION`] of the origin, speeds up to
@@ -19,6 +19,14 @@ use crate::protocol::peer::{BeaconDocument, PeerMissionDocument};
 /// The largest beacon payload accepted (and the most [`encode`] makes for
 /// the ids the fleet names its vessels by).
 pub const MAX_BEACON: usize = 96;
+/// The longest id of a peer fleet's vessel (the beacon's size bound).
+pub const MAX_ID: usize = 7;
+
+/// Whether `id` can name a vessel of a peer fleet.
+pub fn valid_peer_id(id: &str) -> bool {
+    id.len() <= MAX_ID && crate::mission::scenario::valid_id(id)
+}
+
 /// The largest mission document accepted [bytes].
 pub const MAX_MISSION: usize = 1 << 20;
 /// No vessel of a mission is farther than this from its origin [m].
@@ -194,7 +202,7 @@ mod tests {
         // Values that need the widest floats each field allows.
         BeaconDocument {
             id: id.into(),
-            seq: 65_535,
+            seq: 255,
             t: 1_795_000_000.123_456,
             x: -39_999.123_456_7,
             y: 29_999.926_535,
@@ -210,15 +218,15 @@ mod tests {
     }
 
     #[test]
-    fn a_beacon_fits_96_bytes_for_ids_of_up_to_6_characters() {
-        let mut paper = worst("usv-12");
+    fn a_beacon_fits_96_bytes_for_ids_of_up_to_7_characters() {
+        let mut paper = worst("mav-255");
         paper.k = 0.5;
         paper.beta = 0.001;
         paper.rev = 255;
         let bytes = encode(&paper);
         assert!(bytes.len() <= MAX_BEACON, "{} bytes", bytes.len());
-        // Revisions up to 65535 fit with a 5-character id.
-        let mut any = worst("usv-1");
+        // Revisions up to 65535 fit with a 6-character id.
+        let mut any = worst("usv-99");
         any.k = 0.5;
         any.beta = 0.001;
         any.rev = 65_535;

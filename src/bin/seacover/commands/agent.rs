@@ -101,6 +101,9 @@ async fn peer(args: Args) -> anyhow::Result<()> {
     shell::check_warp(args.time_warp)?;
     let mut vessels =
         seacover::agent::fleet(args.vessels, args.id, args.preset.params(), args.seed)?;
+    if let Some(v) = vessels.iter().find(|v| !seacover::agent::peer::wire::valid_peer_id(&v.id)) {
+        return Err(seacover::agent::peer::PeerError::Id(v.id.clone()).into());
+    }
     if let Some((x, y, psi)) = args.start {
         vessels[0].start.x = x;
         vessels[0].start.y = y;
@@ -127,6 +130,9 @@ async fn bridge(args: Args) -> anyhow::Result<()> {
     // With --peer the bridge is each boat's peer node: one membership of
     // the fleet for all the boats it bridges.
     let peer = if args.peer {
+        if let Some(id) = args.id.as_ref().filter(|id| !seacover::agent::peer::wire::valid_peer_id(id)) {
+            return Err(seacover::agent::peer::PeerError::Id(id.clone()).into());
+        }
         let mut config = seacover::agent::peer::PeerConfig::new(args.fleet.clone(), args.zenoh.options())?;
         if let Some(path) = &args.mission {
             config.mission = Some(seacover::agent::peer::mission_file(path)?);
