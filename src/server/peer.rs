@@ -227,6 +227,20 @@ pub async fn run(
                         controlled: Some(beacon.controlled),
                         telemetry: None,
                     };
+                    // A vessel works on a revision above ours: ours before a
+                    // restart, taken while the first query found nobody.
+                    // The coordinator is the mission's source: its mission
+                    // goes out again, above the fleet's.
+                    if beacon.rev > revision {
+                        revision = beacon.rev + 1;
+                        let json = Arc::new(serde_json::to_vec(&PeerMissionDocument { revision, mission: last.clone() }).expect("documents serialize"));
+                        *published.lock().expect("mission lock") = json.clone();
+                        if let Err(e) = put(&json).await {
+                            tracing::warn!(error = %e, "mission revision not published");
+                        }
+                        metrics::gauge!(PEER_REVISION).set(revision as f64);
+                        tracing::info!(revision, "the fleet had a newer revision: the mission published again above it");
+                    }
                     if let Some(h) = heard.get(&id) {
                         h.poses.send_replace(Some(pose));
                         continue;

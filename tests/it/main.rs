@@ -22,6 +22,8 @@ mod geodesy;
 mod http_edge;
 mod load;
 mod network;
+mod peer_medium;
+mod peer_trust;
 mod persistence;
 mod properties;
 mod recording;

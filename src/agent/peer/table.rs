@@ -58,7 +58,7 @@ impl Default for Ageing {
             stale_after: 3.0,
             forget_after: 60.0,
             warp: 1.0,
-            drift: 0.5,
+            drift: 0.2,
         }
     }
 }
@@ -275,7 +275,7 @@ mod tests {
         assert!((n[0].beacon.x - 11.0).abs() < 1e-3, "extrapolated: {}", n[0].beacon.x);
         let n = table.neighbours("me", t0 + Duration::from_secs(10), &ageing);
         let radius = n[0].silent.unwrap().radius;
-        assert!((radius - 15.0).abs() < 1e-3, "{radius}");
+        assert!((radius - 12.0).abs() < 1e-3, "{radius}");
         assert_eq!(n[0].beacon.x, 10.0);
         assert!(table.neighbours("me", t0 + Duration::from_secs(61), &ageing).is_empty());
     }

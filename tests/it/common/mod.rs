@@ -1,13 +1,18 @@
 //! Helpers shared by the integration tests: the real binary on port 0
 //! ([`server`], [`process`]), the coordinator in this process
-//! ([`inprocess`]), vessel links ([`link`]) and positions placed by
-//! geographiclib ([`geo`]). Some helpers serve only tests that skip without
-//! their tool (ArduPilot, chromium), hence `dead_code` is allowed.
+//! ([`inprocess`]), vessel links ([`link`]), positions placed by
+//! geographiclib ([`geo`]), and network namespaces as a radio medium with
+//! the Python observer of peer fleets ([`netns`], [`peer`]), and ArduPilot
+//! SITL boats with a ground station on each ([`sitl`]). Some helpers
+//! serve only tests that skip without their tool (ArduPilot, chromium,
+//! root), hence `dead_code` is allowed.
 #![allow(dead_code)]
 
 pub mod browser;
 pub mod geo;
 pub mod inprocess;
 pub mod link;
+pub mod netns;
+pub mod peer;
 pub mod process;
 pub mod server;

@@ -1,0 +1,317 @@
+#!/usr/bin/env python3
+"""An independent observer of a seacover peer fleet, for the peer tests.
+
+Written against Eclipse Zenoh's Python API (``eclipse-zenoh``, pinned in
+scripts/test to the version of the Rust crate) and ``cbor2``, not against
+seacover's code: it joins the fleet as a Zenoh peer and writes what it hears,
+one JSON object per line, flushed per line, to ``--out FILE``:
+
+- ``seacover/<fleet>/beacon/*`` (a CBOR map, RFC 8949):
+  ``{"kind": "beacon", "key", "recv", "size", "beacon": {decoded map}}``, or
+  ``{"kind": "undecodable", "key", "size", "recv", "error"}`` when the payload
+  is not CBOR or not a map. Byte strings in the map are written as hex text,
+  non-finite floats as the strings "NaN", "inf", "-inf", other keys than
+  text as their ``str``.
+- ``seacover/<fleet>/alive/*`` (liveliness, with history):
+  ``{"kind": "alive" | "gone", "key", "recv"}``.
+- ``seacover/<fleet>/mission`` (a JSON document with an integer "revision"):
+  ``{"kind": "mission", "revision", "safety", "recv", "size"}`` (``safety``:
+  the document's ``safety`` object, null without one; ``revision`` is null,
+  with an ``error``, when the document is not such JSON); with
+  ``--query-mission-every S``, a ``get`` on that key every S seconds writes
+  ``{"kind": "mission_reply", "revision", "safety", "from": <reply key>, "replier":
+  <Zenoh id of the answering session>, "recv", "size"}`` per reply (every
+  queryable is asked, replies are not consolidated) (``{"kind": "mission_reply_error", "error", "recv"}``
+  for an error reply).
+- with ``--query-status-every S``, a ``get`` on ``seacover/<fleet>/status/*``
+  every S seconds (every queryable asked, replies not consolidated, timeout
+  ``min(S, 2)`` s) writes ``{"kind": "status", "from": <reply key>, "sent":
+  <UTC of the query>, "recv", "size", "status": {the JSON document}}`` per
+  reply, or ``{"kind": "status_error", "from", "sent", "recv", "error"}`` for
+  a reply that is an error or not a JSON object.
+
+Each kind of periodic query runs in a thread of its own: one waiting out its
+timeout (a peer that went silent) never delays the other.
+
+``recv`` is the observer's UTC clock in seconds. ``ready`` is printed on
+stdout (flushed) once the session is open and every subscriber declared.
+The observer runs for ``--duration S`` seconds, or until SIGTERM or SIGINT;
+either way it closes the session and the file cleanly and exits 0.
+"""
+
+import argparse
+import json
+import math
+import os
+import signal
+import sys
+import threading
+import time
+
+# The observer is the tests' instrument: it must keep hearing the peers it can
+# reach when others vanish. Zenoh (1.10.2) sets SO_LINGER 10 s on its TCP
+# links and closes a link whose lease expired on one of the session's RX
+# runtime workers (2 by default): with unsent data queued for a peer behind a
+# partition, close(2) blocks that worker for up to 10 s, and two such links
+# (any partition) block every worker, so the whole session stops receiving
+# for 10 s (measured: strace shows two threads in close() for > 8 s, and no
+# sample delivered meanwhile). More RX workers than links that can close at
+# once avoid that; ZENOH_RUNTIME, if set, wins.
+os.environ.setdefault("ZENOH_RUNTIME", "(rx: (worker_threads: 16))")
+
+import cbor2  # noqa: E402 (after the runtime's environment)
+import zenoh  # noqa: E402
+
+
+def parse_args(argv):
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--fleet", required=True, help="fleet name (key prefix seacover/<fleet>)")
+    p.add_argument("--out", required=True, help="JSON-lines file to write")
+    p.add_argument("--connect", action="append", default=[], metavar="EP",
+                   help="Zenoh endpoint to connect to, e.g. tcp/10.0.0.1:7447 (repeatable)")
+    p.add_argument("--listen", action="append", default=[], metavar="EP",
+                   help="Zenoh endpoint to listen on (repeatable)")
+    p.add_argument("--config", help="a Zenoh JSON5 configuration file (e.g. credentials)")
+    p.add_argument("--no-multicast", action="store_true",
+                   help="turn multicast scouting off (it is on by default)")
+    p.add_argument("--duration", type=float, help="exit after this many seconds")
+    p.add_argument("--query-mission-every", type=float, metavar="S",
+                   help="query seacover/<fleet>/mission every S seconds")
+    p.add_argument("--query-status-every", type=float, metavar="S",
+                   help="query seacover/<fleet>/status/* every S seconds")
+    return p.parse_args(argv)
+
+
+def make_config(args):
+    """The session's configuration: the file if given, then peer mode,
+    the endpoints and the multicast scouting switch on top of it."""
+    config = zenoh.Config.from_file(args.config) if args.config else zenoh.Config()
+    config.insert_json5("mode", json.dumps("peer"))
+    if args.connect:
+        config.insert_json5("connect/endpoints", json.dumps(args.connect))
+    if args.listen:
+        config.insert_json5("listen/endpoints", json.dumps(args.listen))
+    config.insert_json5("scouting/multicast/enabled", json.dumps(not args.no_multicast))
+    return config
+
+
+def jsonable(value):
+    """`value` (decoded CBOR) as something json.dumps writes as strict JSON."""
+    if isinstance(value, float):
+        if math.isnan(value):
+            return "NaN"
+        if math.isinf(value):
+            return "inf" if value > 0 else "-inf"
+        return value
+    if isinstance(value, (bytes, bytearray)):
+        return bytes(value).hex()
+    if isinstance(value, dict):
+        return {k if isinstance(k, str) else str(k): jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [jsonable(v) for v in value]
+    if isinstance(value, cbor2.CBORTag):
+        return {"tag": value.tag, "value": jsonable(value.value)}
+    if value is None or isinstance(value, (bool, int, str)):
+        return value
+    return str(value)
+
+
+class Out:
+    """The output file: one JSON object per line, flushed per line, written
+    from Zenoh's callback threads and the main thread alike."""
+
+    def __init__(self, path):
+        self.file = open(path, "a", encoding="utf-8")
+        self.lock = threading.Lock()
+
+    def write(self, obj):
+        line = json.dumps(obj, allow_nan=False, separators=(",", ":"))
+        with self.lock:
+            if self.file is not None:
+                self.file.write(line + "\n")
+                self.file.flush()
+
+    def close(self):
+        with self.lock:
+            if self.file is not None:
+                self.file.close()
+                self.file = None
+
+
+def on_beacon(out):
+    def callback(sample):
+        recv = time.time()
+        data = sample.payload.to_bytes()
+        key = str(sample.key_expr)
+        try:
+            value = cbor2.loads(data)
+            if not isinstance(value, dict):
+                raise ValueError(f"not a CBOR map but {type(value).__name__}")
+        except Exception as e:  # noqa: BLE001 (any decoding failure is the finding)
+            out.write({"kind": "undecodable", "key": key, "size": len(data),
+                       "recv": recv, "error": str(e)})
+            return
+        out.write({"kind": "beacon", "key": key, "recv": recv, "size": len(data),
+                   "beacon": jsonable(value)})
+    return callback
+
+
+def on_alive(out):
+    def callback(sample):
+        kind = "alive" if sample.kind == zenoh.SampleKind.PUT else "gone"
+        out.write({"kind": kind, "key": str(sample.key_expr), "recv": time.time()})
+    return callback
+
+
+def mission_revision(data):
+    """The document's integer "revision", or (None, error)."""
+    try:
+        doc = json.loads(data)
+    except Exception as e:  # noqa: BLE001
+        return None, f"not JSON: {e}"
+    revision = doc.get("revision") if isinstance(doc, dict) else None
+    if isinstance(revision, bool) or not isinstance(revision, int):
+        return None, "no integer \"revision\" field"
+    return revision, None
+
+
+def mission_safety(data):
+    """The document's "safety" object (None without one)."""
+    try:
+        doc = json.loads(data)
+    except Exception:  # noqa: BLE001 (mission_revision reports it)
+        return None
+    safety = doc.get("safety") if isinstance(doc, dict) else None
+    return jsonable(safety) if isinstance(safety, dict) else None
+
+
+def on_mission(out):
+    def callback(sample):
+        data = sample.payload.to_bytes()
+        revision, error = mission_revision(data)
+        obj = {"kind": "mission", "revision": revision, "safety": mission_safety(data),
+               "recv": time.time(), "size": len(data)}
+        if error:
+            obj["error"] = error
+        out.write(obj)
+    return callback
+
+
+def replier_zid(reply):
+    """The answering session's Zenoh id (an unstable API: None without it)."""
+    try:
+        return str(reply.replier_id.zid)
+    except Exception:  # noqa: BLE001
+        return None
+
+
+def query_mission(session, key, out, timeout):
+    """One `get` on the mission key; a line per reply."""
+    replies = session.get(key, target=zenoh.QueryTarget.ALL,
+                          consolidation=zenoh.ConsolidationMode.NONE, timeout=timeout)
+    for reply in replies:
+        recv = time.time()
+        if reply.ok is not None:
+            sample = reply.ok
+            data = sample.payload.to_bytes()
+            revision, error = mission_revision(data)
+            obj = {"kind": "mission_reply", "revision": revision,
+                   "safety": mission_safety(data),
+                   "from": str(sample.key_expr), "recv": recv, "size": len(data)}
+            if error:
+                obj["error"] = error
+        else:
+            obj = {"kind": "mission_reply_error", "recv": recv,
+                   "error": reply.err.payload.to_bytes().decode("utf-8", "replace")}
+        replier = replier_zid(reply)
+        if replier is not None:
+            obj["replier"] = replier
+        out.write(obj)
+
+
+def query_status(session, selector, out, timeout):
+    """One `get` on every vessel's status key; a line per reply."""
+    sent = time.time()
+    replies = session.get(selector, target=zenoh.QueryTarget.ALL,
+                          consolidation=zenoh.ConsolidationMode.NONE, timeout=timeout)
+    for reply in replies:
+        recv = time.time()
+        if reply.ok is not None:
+            sample = reply.ok
+            data = sample.payload.to_bytes()
+            key = str(sample.key_expr)
+            try:
+                doc = json.loads(data)
+                if not isinstance(doc, dict):
+                    raise ValueError(f"not a JSON object but {type(doc).__name__}")
+            except Exception as e:  # noqa: BLE001 (any decoding failure is the finding)
+                out.write({"kind": "status_error", "from": key, "sent": sent, "recv": recv,
+                           "error": str(e)})
+                continue
+            out.write({"kind": "status", "from": key, "sent": sent, "recv": recv,
+                       "size": len(data), "status": jsonable(doc)})
+        else:
+            out.write({"kind": "status_error", "from": None, "sent": sent, "recv": recv,
+                       "error": reply.err.payload.to_bytes().decode("utf-8", "replace")})
+
+
+def main(argv):
+    args = parse_args(argv)
+    stop = threading.Event()
+    for sig in (signal.SIGTERM, signal.SIGINT):
+        signal.signal(sig, lambda *_: stop.set())
+
+    out = Out(args.out)
+    prefix = f"seacover/{args.fleet}"
+    session = zenoh.open(make_config(args))
+    subscribers = [
+        session.declare_subscriber(f"{prefix}/beacon/*", on_beacon(out)),
+        session.liveliness().declare_subscriber(f"{prefix}/alive/*", on_alive(out), history=True),
+        session.declare_subscriber(f"{prefix}/mission", on_mission(out)),
+    ]
+    print("ready", flush=True)
+
+    # Each kind of periodic query in a thread of its own, so that a query
+    # waiting out its timeout (a partitioned peer) never delays the other.
+    def periodic(period, timeout, query):
+        def loop():
+            due = time.monotonic()
+            while not stop.is_set():
+                query(timeout)
+                # A period after the previous one was due (never a backlog).
+                due = max(due + period, time.monotonic())
+                stop.wait(max(0.0, due - time.monotonic()))
+        thread = threading.Thread(target=loop, daemon=True)
+        thread.start()
+        return thread
+
+    threads = []
+    if args.query_mission_every:
+        timeout = max(0.1, min(args.query_mission_every, 5.0))
+        threads.append(periodic(args.query_mission_every, timeout,
+                                lambda t: query_mission(session, f"{prefix}/mission", out, t)))
+    if args.query_status_every:
+        timeout = max(0.1, min(args.query_status_every, 2.0))
+        threads.append(periodic(args.query_status_every, timeout,
+                                lambda t: query_status(session, f"{prefix}/status/*", out, t)))
+    deadline = None if args.duration is None else time.monotonic() + args.duration
+    try:
+        while not stop.is_set():
+            now = time.monotonic()
+            if deadline is not None and now >= deadline:
+                break
+            # Bounded, so that a signal is noticed promptly in any case.
+            stop.wait(max(0.0, min(1.0, (deadline or now + 1.0) - now)))
+        stop.set()
+        for thread in threads:
+            thread.join(timeout=10.0)
+    finally:
+        for s in subscribers:
+            s.undeclare()
+        session.close()
+        out.close()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))

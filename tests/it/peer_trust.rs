@@ -1,0 +1,217 @@
+//! Who may join a peer fleet (issue 30 §3, test f): three `seacover agent
+//! --peer` vessels with the fleet's credentials (`seacover fleet
+//! credentials`, Zenoh's user/password authentication), each in its own
+//! network namespace; an independent Python observer with the credentials;
+//! and, in one more namespace, first a program without them (it must hear
+//! nothing and be heard by nobody), then one with them that sends every
+//! kind of bad input. Nothing may change (missions, who is in the
+//! partition, positions), and every refusal must be counted in the
+//! vessels' status.
+//!
+//! Needs root (network namespaces) and the test venv's Python with
+//! eclipse-zenoh and cbor2: skipped with a message without them, a failure
+//! under CI=true.
+
+use std::path::Path;
+use std::process::Command;
+use std::thread::sleep;
+use std::time::Duration;
+
+use serde_json::{Value, json};
+
+use crate::common::netns::{Medium, cleanup_stale, root_or_skip};
+use crate::common::peer::{INJECT, Observer, now, python_or_skip, start_ready, wait_for};
+use crate::common::process::KillOnDrop;
+
+const SEACOVER: &str = env!("CARGO_BIN_EXE_seacover");
+const FLEET: &str = "trust";
+const PAPER: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/paper.json");
+
+/// Vessel `usv-<i+1>` in host `i`, with the credentials.
+fn vessel(medium: &Medium, i: usize, config: &Path) -> KillOnDrop {
+    let start = format!("{},{}", 20.0 + 25.0 * i as f64, 30.0 + 10.0 * i as f64);
+    let mut cmd = medium.command(i, SEACOVER);
+    cmd.args(["agent", "--peer", "--fleet", FLEET, "--id"])
+        .arg(format!("usv-{}", i + 1))
+        .args(["--start", &start, "--mission", PAPER, "--time-warp", "2"])
+        .arg("--zenoh-config")
+        .arg(config)
+        .env("RUST_LOG", "warn");
+    KillOnDrop(cmd.spawn().expect("seacover agent starts"))
+}
+
+/// Runs inject.py in host `host` to completion (it exits after its last
+/// put), with `args`.
+fn inject(medium: &Medium, python: &Path, host: usize, args: &[&str]) {
+    let mut cmd = medium.command(host, python);
+    cmd.arg(INJECT).args(args);
+    let mut child = start_ready(cmd, &format!("inject {args:?}"), 30);
+    let status = wait_for(30.0, "inject finishes", || child.0.try_wait().unwrap());
+    assert!(status.success(), "inject {args:?}: {status}");
+}
+
+/// The newest status document of each vessel the observer has asked.
+fn statuses(observer: &Observer) -> std::collections::BTreeMap<String, Value> {
+    let mut out = std::collections::BTreeMap::new();
+    for r in observer.of_kind("status") {
+        let doc = r["status"].clone();
+        if let Some(id) = doc["id"].as_str() {
+            out.insert(id.to_string(), doc);
+        }
+    }
+    out
+}
+
+fn refused(doc: &Value, reason: &str) -> u64 {
+    doc["refused"][reason].as_u64().unwrap_or(0)
+}
+
+#[test]
+fn without_credentials_nothing_is_heard_and_with_them_bad_input_changes_nothing() {
+    let test = "peer_trust";
+    if !root_or_skip(test) {
+        return;
+    }
+    let Some(python) = python_or_skip(test) else {
+        return;
+    };
+    cleanup_stale();
+    let dir = tempfile::tempdir().unwrap();
+    let creds = dir.path().join("creds");
+    let out = Command::new(SEACOVER)
+        .args(["fleet", "credentials", "--fleet", FLEET])
+        .arg(&creds)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let config = creds.join("zenoh.json5");
+    assert_eq!(
+        String::from_utf8_lossy(&out.stdout).trim(),
+        config.display().to_string()
+    );
+
+    // Hosts 0–2: vessels; 3: the observer; 4: the outsider.
+    let medium = Medium::new(5);
+    let _vessels: Vec<KillOnDrop> = (0..3).map(|i| vessel(&medium, i, &config)).collect();
+    let config_arg = config.to_str().unwrap();
+    let observer = Observer::start(
+        &medium,
+        3,
+        &python,
+        FLEET,
+        &["--config", config_arg, "--query-status-every", "1"],
+    );
+    let outsider = Observer::start(&medium, 4, &python, FLEET, &[]);
+    // The fleet is up: every vessel is heard by the observer, and each one
+    // has the other two in its partition.
+    wait_for(30.0, "every vessel sees the other two", || {
+        let s = statuses(&observer);
+        (s.len() == 3 && s.values().all(|d| d["neighbours"] == 2)).then_some(())
+    });
+    // A program without the credentials: it hears nothing, and what it
+    // sends reaches nobody.
+    let evil = json!({
+        "id": "evil", "seq": 0, "t": 0.0, "x": 50.0, "y": 50.0, "psi": 0.0, "u": 0.0,
+        "v": 0.0, "r": 0.0, "k": 0.5, "beta": 0.001, "rev": 0, "controlled": true,
+    });
+    inject(
+        &medium,
+        &python,
+        4,
+        &["--fleet", FLEET, "--key-suffix", "beacon/evil", "--cbor-json", &evil.to_string(), "--stamp", "--count", "20", "--hz", "10"],
+    );
+    sleep(Duration::from_secs(3));
+    // It does hear itself (the outsider's own injector, beside it), never
+    // the fleet: no beacon, token or mission of a vessel.
+    let overheard = outsider
+        .records()
+        .iter()
+        .filter(|r| r["key"].as_str().is_some_and(|k| !k.ends_with("/evil")))
+        .count();
+    let heard_by_observer = observer.of_kind("beacon").len();
+    println!(
+        "peer_trust: without credentials the outsider recorded {overheard} messages; the observer with them {heard_by_observer} beacons"
+    );
+    assert_eq!(overheard, 0, "a program without credentials heard the fleet: {:?}", outsider.records());
+    assert!(heard_by_observer > 30, "the observer with credentials heard only {heard_by_observer} beacons");
+    let before = statuses(&observer);
+    for (id, doc) in &before {
+        assert!(doc["heard"].get("evil").is_none(), "{id} heard the outsider: {doc}");
+        assert_eq!(doc["revision"], 0, "{id}: {doc}");
+    }
+    drop(outsider);
+
+    // With the credentials, every kind of bad input of §3.
+    let c = ["--config", config_arg];
+    let stamp = |x: f64, u: f64, id: &str| {
+        json!({
+            "id": id, "seq": 0, "t": 0.0, "x": x, "y": 40.0, "psi": 0.0, "u": u, "v": 0.0,
+            "r": 0.0, "k": 0.5, "beta": 0.001, "rev": 0, "controlled": true,
+        })
+        .to_string()
+    };
+    let bad_beacons: Vec<(&str, Vec<String>)> = vec![
+        ("undecodable", vec!["--key-suffix".into(), "beacon/junk".into(), "--hex".into(), "ff00ff00".into()]),
+        ("oversized", vec!["--key-suffix".into(), "beacon/big".into(), "--hex".into(), "ab".repeat(200)]),
+        ("out_of_range", vec!["--key-suffix".into(), "beacon/far".into(), "--cbor-json".into(), stamp(60_000.0, 0.0, "far"), "--stamp".into(), "--canonical".into()]),
+        ("out_of_range", vec!["--key-suffix".into(), "beacon/fast".into(), "--cbor-json".into(), stamp(50.0, 25.0, "fast"), "--stamp".into(), "--canonical".into()]),
+        ("id_conflict", vec!["--key-suffix".into(), "beacon/usv-1".into(), "--cbor-json".into(), stamp(900.0, 0.0, "usv-1"), "--stamp".into(), "--canonical".into()]),
+    ];
+    for (reason, args) in &bad_beacons {
+        // Ten at 5 Hz: the injector links to each vessel in turn (its
+        // first subscriber is enough for it to start), and every vessel
+        // must get some.
+        let mut all: Vec<&str> = vec!["--fleet", FLEET, "--count", "10", "--hz", "5", "--wait-subscriber", "10"];
+        all.extend(c);
+        all.extend(args.iter().map(String::as_str));
+        inject(&medium, &python, 4, &all);
+        println!("peer_trust: sent 10 × {reason}");
+    }
+    let other = stamp(50.0, 0.0, "o1");
+    let mut all = vec!["--fleet", "other", "--key-suffix", "beacon/o1", "--cbor-json", &other, "--stamp", "--canonical", "--count", "10", "--hz", "5", "--wait-subscriber", "10"];
+    all.extend(c);
+    inject(&medium, &python, 4, &all);
+    // A mission revision that fails validation.
+    let mut mission: Value = serde_json::from_str(
+        &std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/it/peer/paper-mission.json")).unwrap(),
+    )
+    .unwrap();
+    mission["revision"] = json!(99);
+    mission["tick_hz"] = json!(-1.0);
+    let bad_mission = dir.path().join("bad-mission.json");
+    std::fs::write(&bad_mission, mission.to_string()).unwrap();
+    let mut all = vec!["--fleet", FLEET, "--mission-json", bad_mission.to_str().unwrap(), "--count", "10", "--hz", "5", "--wait-subscriber", "10"];
+    all.extend(c);
+    inject(&medium, &python, 4, &all);
+
+    // Give the status queries time to show the counts.
+    let since = now();
+    sleep(Duration::from_secs(3));
+    let after = wait_for(10.0, "statuses after the bad input", || {
+        let s = statuses(&observer);
+        let fresh = observer
+            .of_kind("status")
+            .iter()
+            .filter(|r| r["recv"].as_f64().unwrap_or(0.0) > since)
+            .count();
+        (s.len() == 3 && fresh >= 3).then_some(s)
+    });
+    for (id, doc) in &after {
+        println!("peer_trust: {id} refused {}", doc["refused"]);
+        for reason in ["undecodable", "oversized", "out_of_range", "other_fleet", "mission_invalid"] {
+            assert!(refused(doc, reason) > refused(&before[id], reason), "{id}: {reason} not counted: {doc}");
+        }
+        assert_eq!(doc["revision"], 0, "{id}: the invalid mission changed it: {doc}");
+        assert_eq!(doc["neighbours"], 2, "{id}: {doc}");
+        let heard: Vec<&String> = doc["heard"].as_object().unwrap().keys().collect();
+        assert!(
+            heard.iter().all(|h| h.starts_with("usv-")),
+            "{id} took a bad beacon's sender in: {heard:?}"
+        );
+    }
+    // The second node claiming usv-1: counted by usv-1 itself (its own id)
+    // and the others (a jump no hull makes).
+    let conflicts: u64 = after.values().map(|d| refused(d, "id_conflict")).sum();
+    assert!(conflicts >= 5, "id conflicts counted: {conflicts}");
+    println!("peer_trust: id_conflict counted {conflicts} times over the three vessels");
+}
