@@ -5,12 +5,12 @@
 //! (commands from the coordinator) and the peer node (commands from its own
 //! loop on board).
 
+use crate::control::Vec3;
 use crate::control::controller::{ControllerGains, control};
 use crate::control::disturbance::Disturbance;
 use crate::control::model::{State, VesselParams, step};
 use crate::control::observer::{Observer, ObserverGains};
 use crate::control::reference::{Governor, Line, Peaks};
-use crate::control::Vec3;
 use crate::protocol::{CommandDocument, PoseDocument};
 
 /// One simulated vessel's settings.
@@ -123,4 +123,3 @@ fn decimals(v: f64, n: i32) -> f64 {
     let scale = 10f64.powi(n);
     (v * scale).round() / scale
 }
-

@@ -80,7 +80,9 @@ pub async fn run(
         while let Ok(reply) = replies.recv_async().await {
             if let Ok(sample) = reply.result()
                 && let Ok(doc) = wire::decode_mission(&sample.payload().to_bytes())
-                && fleet_revision.as_ref().is_none_or(|(r, _)| doc.revision > *r)
+                && fleet_revision
+                    .as_ref()
+                    .is_none_or(|(r, _)| doc.revision > *r)
             {
                 fleet_revision = Some((doc.revision, doc.mission));
             }
@@ -133,7 +135,10 @@ pub async fn run(
                 Some((_, id)) => {
                     // Full: this beacon is dropped; the vessel's next one
                     // supersedes it anyway.
-                    let _ = tx.try_send(Event::Beacon(id.to_string(), sample.payload().to_bytes().to_vec()));
+                    let _ = tx.try_send(Event::Beacon(
+                        id.to_string(),
+                        sample.payload().to_bytes().to_vec(),
+                    ));
                 }
                 None => {}
             }
@@ -279,7 +284,12 @@ pub async fn run(
 
 /// Registers a vessel heard on the fleet with the tick task, its link
 /// being this member: commands are received and dropped.
-async fn register(app: &AppState, id: &str, actuator: ActuatorDocument, pose: PoseDocument) -> Option<Heard> {
+async fn register(
+    app: &AppState,
+    id: &str,
+    actuator: ActuatorDocument,
+    pose: PoseDocument,
+) -> Option<Heard> {
     let link = app.next_link.fetch_add(1, Ordering::Relaxed);
     let (tx, mut drained) = mpsc::channel(16);
     let (poses, slot) = watch::channel(Some(pose));
@@ -300,7 +310,8 @@ async fn register(app: &AppState, id: &str, actuator: ActuatorDocument, pose: Po
     match answer.await {
         Ok(Ok(_)) => {
             // The member sends no commands: the tick's are dropped here.
-            app.tracker.spawn(async move { while drained.recv().await.is_some() {} });
+            app.tracker
+                .spawn(async move { while drained.recv().await.is_some() {} });
             tracing::info!(vessel = id, "peer vessel heard");
             Some(Heard { link, poses })
         }

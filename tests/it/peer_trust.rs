@@ -83,7 +83,11 @@ fn without_credentials_nothing_is_heard_and_with_them_bad_input_changes_nothing(
         .arg(&creds)
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let config = creds.join("zenoh.json5");
     assert_eq!(
         String::from_utf8_lossy(&out.stdout).trim(),
@@ -118,7 +122,19 @@ fn without_credentials_nothing_is_heard_and_with_them_bad_input_changes_nothing(
         &medium,
         &python,
         4,
-        &["--fleet", FLEET, "--key-suffix", "beacon/evil", "--cbor-json", &evil.to_string(), "--stamp", "--count", "20", "--hz", "10"],
+        &[
+            "--fleet",
+            FLEET,
+            "--key-suffix",
+            "beacon/evil",
+            "--cbor-json",
+            &evil.to_string(),
+            "--stamp",
+            "--count",
+            "20",
+            "--hz",
+            "10",
+        ],
     );
     sleep(Duration::from_secs(3));
     // It does hear itself (the outsider's own injector, beside it), never
@@ -132,11 +148,22 @@ fn without_credentials_nothing_is_heard_and_with_them_bad_input_changes_nothing(
     println!(
         "peer_trust: without credentials the outsider recorded {overheard} messages; the observer with them {heard_by_observer} beacons"
     );
-    assert_eq!(overheard, 0, "a program without credentials heard the fleet: {:?}", outsider.records());
-    assert!(heard_by_observer > 30, "the observer with credentials heard only {heard_by_observer} beacons");
+    assert_eq!(
+        overheard,
+        0,
+        "a program without credentials heard the fleet: {:?}",
+        outsider.records()
+    );
+    assert!(
+        heard_by_observer > 30,
+        "the observer with credentials heard only {heard_by_observer} beacons"
+    );
     let before = statuses(&observer);
     for (id, doc) in &before {
-        assert!(doc["heard"].get("evil").is_none(), "{id} heard the outsider: {doc}");
+        assert!(
+            doc["heard"].get("evil").is_none(),
+            "{id} heard the outsider: {doc}"
+        );
         assert_eq!(doc["revision"], 0, "{id}: {doc}");
     }
     drop(outsider);
@@ -151,36 +178,121 @@ fn without_credentials_nothing_is_heard_and_with_them_bad_input_changes_nothing(
         .to_string()
     };
     let bad_beacons: Vec<(&str, Vec<String>)> = vec![
-        ("undecodable", vec!["--key-suffix".into(), "beacon/junk".into(), "--hex".into(), "ff00ff00".into()]),
-        ("oversized", vec!["--key-suffix".into(), "beacon/big".into(), "--hex".into(), "ab".repeat(200)]),
-        ("out_of_range", vec!["--key-suffix".into(), "beacon/far".into(), "--cbor-json".into(), stamp(60_000.0, 0.0, "far"), "--stamp".into(), "--canonical".into()]),
-        ("out_of_range", vec!["--key-suffix".into(), "beacon/fast".into(), "--cbor-json".into(), stamp(50.0, 25.0, "fast"), "--stamp".into(), "--canonical".into()]),
-        ("id_conflict", vec!["--key-suffix".into(), "beacon/usv-1".into(), "--cbor-json".into(), stamp(900.0, 0.0, "usv-1"), "--stamp".into(), "--canonical".into()]),
+        (
+            "undecodable",
+            vec![
+                "--key-suffix".into(),
+                "beacon/junk".into(),
+                "--hex".into(),
+                "ff00ff00".into(),
+            ],
+        ),
+        (
+            "oversized",
+            vec![
+                "--key-suffix".into(),
+                "beacon/big".into(),
+                "--hex".into(),
+                "ab".repeat(200),
+            ],
+        ),
+        (
+            "out_of_range",
+            vec![
+                "--key-suffix".into(),
+                "beacon/far".into(),
+                "--cbor-json".into(),
+                stamp(60_000.0, 0.0, "far"),
+                "--stamp".into(),
+                "--canonical".into(),
+            ],
+        ),
+        (
+            "out_of_range",
+            vec![
+                "--key-suffix".into(),
+                "beacon/fast".into(),
+                "--cbor-json".into(),
+                stamp(50.0, 25.0, "fast"),
+                "--stamp".into(),
+                "--canonical".into(),
+            ],
+        ),
+        (
+            "id_conflict",
+            vec![
+                "--key-suffix".into(),
+                "beacon/usv-1".into(),
+                "--cbor-json".into(),
+                stamp(900.0, 0.0, "usv-1"),
+                "--stamp".into(),
+                "--canonical".into(),
+            ],
+        ),
     ];
     for (reason, args) in &bad_beacons {
         // Ten at 5 Hz: the injector links to each vessel in turn (its
         // first subscriber is enough for it to start), and every vessel
         // must get some.
-        let mut all: Vec<&str> = vec!["--fleet", FLEET, "--count", "10", "--hz", "5", "--wait-subscriber", "10"];
+        let mut all: Vec<&str> = vec![
+            "--fleet",
+            FLEET,
+            "--count",
+            "10",
+            "--hz",
+            "5",
+            "--wait-subscriber",
+            "10",
+        ];
         all.extend(c);
         all.extend(args.iter().map(String::as_str));
         inject(&medium, &python, 4, &all);
         println!("peer_trust: sent 10 × {reason}");
     }
     let other = stamp(50.0, 0.0, "o1");
-    let mut all = vec!["--fleet", "other", "--key-suffix", "beacon/o1", "--cbor-json", &other, "--stamp", "--canonical", "--count", "10", "--hz", "5", "--wait-subscriber", "10"];
+    let mut all = vec![
+        "--fleet",
+        "other",
+        "--key-suffix",
+        "beacon/o1",
+        "--cbor-json",
+        &other,
+        "--stamp",
+        "--canonical",
+        "--count",
+        "10",
+        "--hz",
+        "5",
+        "--wait-subscriber",
+        "10",
+    ];
     all.extend(c);
     inject(&medium, &python, 4, &all);
     // A mission revision that fails validation.
     let mut mission: Value = serde_json::from_str(
-        &std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/it/peer/paper-mission.json")).unwrap(),
+        &std::fs::read_to_string(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/tests/it/peer/paper-mission.json"
+        ))
+        .unwrap(),
     )
     .unwrap();
     mission["revision"] = json!(99);
     mission["tick_hz"] = json!(-1.0);
     let bad_mission = dir.path().join("bad-mission.json");
     std::fs::write(&bad_mission, mission.to_string()).unwrap();
-    let mut all = vec!["--fleet", FLEET, "--mission-json", bad_mission.to_str().unwrap(), "--count", "10", "--hz", "5", "--wait-subscriber", "10"];
+    let mut all = vec![
+        "--fleet",
+        FLEET,
+        "--mission-json",
+        bad_mission.to_str().unwrap(),
+        "--count",
+        "10",
+        "--hz",
+        "5",
+        "--wait-subscriber",
+        "10",
+    ];
     all.extend(c);
     inject(&medium, &python, 4, &all);
 
@@ -198,10 +310,22 @@ fn without_credentials_nothing_is_heard_and_with_them_bad_input_changes_nothing(
     });
     for (id, doc) in &after {
         println!("peer_trust: {id} refused {}", doc["refused"]);
-        for reason in ["undecodable", "oversized", "out_of_range", "other_fleet", "mission_invalid"] {
-            assert!(refused(doc, reason) > refused(&before[id], reason), "{id}: {reason} not counted: {doc}");
+        for reason in [
+            "undecodable",
+            "oversized",
+            "out_of_range",
+            "other_fleet",
+            "mission_invalid",
+        ] {
+            assert!(
+                refused(doc, reason) > refused(&before[id], reason),
+                "{id}: {reason} not counted: {doc}"
+            );
         }
-        assert_eq!(doc["revision"], 0, "{id}: the invalid mission changed it: {doc}");
+        assert_eq!(
+            doc["revision"], 0,
+            "{id}: the invalid mission changed it: {doc}"
+        );
         assert_eq!(doc["neighbours"], 2, "{id}: {doc}");
         let heard: Vec<&String> = doc["heard"].as_object().unwrap().keys().collect();
         assert!(

@@ -220,19 +220,29 @@ pub async fn run(config: BridgeConfig, shutdown: CancellationToken) -> Result<()
                 .ok_or(BridgeError::NoOrigin)?;
             let (frames, frame) = watch::channel(frame_of(origin)?);
             tracing::info!(lat = origin.lat, lon = origin.lon, "mission origin");
-            tasks.spawn(follow_origin(http, config.clone(), frames, shutdown.clone()));
+            tasks.spawn(follow_origin(
+                http,
+                config.clone(),
+                frames,
+                shutdown.clone(),
+            ));
             (url, None, frame)
         }
         Some(member) => {
             // The fleet's mission gives the origin; the boats wait for it.
             let mut missions = member.missions();
             let origin = loop {
-                let origin = missions.borrow_and_update().as_ref().map(|r| r.mission.origin);
+                let origin = missions
+                    .borrow_and_update()
+                    .as_ref()
+                    .map(|r| r.mission.origin);
                 match origin {
                     Some(Some(o)) => break o,
                     Some(None) => return Err(BridgeError::NoOrigin),
                     None => {
-                        tracing::info!("waiting for the fleet's mission (its origin places the boats)");
+                        tracing::info!(
+                            "waiting for the fleet's mission (its origin places the boats)"
+                        );
                         tokio::select! {
                             _ = shutdown.cancelled() => return Ok(()),
                             changed = missions.changed() => if changed.is_err() { return Ok(()) },
@@ -241,7 +251,11 @@ pub async fn run(config: BridgeConfig, shutdown: CancellationToken) -> Result<()
                 }
             };
             let (frames, frame) = watch::channel(frame_of(origin)?);
-            tracing::info!(lat = origin.lat, lon = origin.lon, "mission origin, from the fleet");
+            tracing::info!(
+                lat = origin.lat,
+                lon = origin.lon,
+                "mission origin, from the fleet"
+            );
             (String::new(), Some((frames, missions)), frame)
         }
     };
@@ -675,7 +689,10 @@ async fn follow_fleet_origin(
             _ = shutdown.cancelled() => return,
             changed = missions.changed() => if changed.is_err() { return },
         }
-        let origin = missions.borrow_and_update().as_ref().and_then(|r| r.mission.origin);
+        let origin = missions
+            .borrow_and_update()
+            .as_ref()
+            .and_then(|r| r.mission.origin);
         match origin.map(frame_of) {
             Some(Ok(f)) if f != *frames.borrow() => {
                 tracing::info!("the mission's origin moved");

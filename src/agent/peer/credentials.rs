@@ -30,7 +30,10 @@ pub fn write(dir: &Path, fleet: &str) -> std::io::Result<PathBuf> {
     if config.exists() {
         return Err(std::io::Error::new(
             std::io::ErrorKind::AlreadyExists,
-            format!("{} exists: remove it to make new credentials", config.display()),
+            format!(
+                "{} exists: remove it to make new credentials",
+                config.display()
+            ),
         ));
     }
     let mut bytes = [0u8; 32];

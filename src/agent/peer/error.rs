@@ -18,9 +18,10 @@ pub enum PeerError {
     },
     #[error("the mission in {path}: {source}")]
     Mission { path: PathBuf, source: MissionError },
-    #[error("a peer fleet's vessel id is at most 7 characters of [A-Za-z0-9_.-] (the beacon's 96 bytes): {0:?}")]
+    #[error(
+        "a peer fleet's vessel id is at most 7 characters of [A-Za-z0-9_.-] (the beacon's 96 bytes): {0:?}"
+    )]
     Id(String),
     #[error("zenoh: {0}")]
     Zenoh(String),
 }
-

@@ -31,8 +31,8 @@ pub mod step;
 pub mod table;
 pub mod wire;
 
-pub use error::PeerError;
 use crate::protocol::peer::PeerMissionDocument;
+pub use error::PeerError;
 
 /// A peer process's settings.
 #[derive(Debug, Clone)]
@@ -72,10 +72,11 @@ pub fn mission_file(path: &std::path::Path) -> Result<PeerMissionDocument, PeerE
         path: path.to_path_buf(),
         source,
     })?;
-    let mission = crate::mission::Mission::from_text(&text).map_err(|source| PeerError::Mission {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let mission =
+        crate::mission::Mission::from_text(&text).map_err(|source| PeerError::Mission {
+            path: path.to_path_buf(),
+            source,
+        })?;
     Ok(PeerMissionDocument {
         revision: 0,
         mission: mission.document(),

@@ -125,7 +125,11 @@ impl Member {
                 let key = sample.key_expr().as_str();
                 let bytes = sample.payload().to_bytes();
                 let local = wire::Keys::parse_beacon(key).is_some_and(|(_, id)| {
-                    s.sent.lock().expect("sent lock").get(id).map(|b| b.as_slice())
+                    s.sent
+                        .lock()
+                        .expect("sent lock")
+                        .get(id)
+                        .map(|b| b.as_slice())
                         == Some(&bytes[..])
                 });
                 let ageing = s.config.ageing;
@@ -173,7 +177,12 @@ impl Member {
                     None => true,
                     Some(h) => newest.is_some_and(|n| n > h),
                 };
-                if behind && let Ok(replies) = z.get(s.keys.mission()).timeout(Duration::from_secs(1)).await {
+                if behind
+                    && let Ok(replies) = z
+                        .get(s.keys.mission())
+                        .timeout(Duration::from_secs(1))
+                        .await
+                {
                     while let Ok(reply) = replies.recv_async().await {
                         if let Ok(sample) = reply.result() {
                             s.offer_mission(&sample.payload().to_bytes());
@@ -224,7 +233,8 @@ impl Member {
         };
         let started = Instant::now();
         let mut pose: Option<(crate::protocol::PoseDocument, Instant)> = None;
-        let mut beacons = tokio::time::interval(Duration::from_secs_f64(1.0 / self.shared.config.beacon_hz));
+        let mut beacons =
+            tokio::time::interval(Duration::from_secs_f64(1.0 / self.shared.config.beacon_hz));
         beacons.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
         let mut control = tokio::time::interval(Duration::from_millis(100));
         control.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
@@ -259,7 +269,14 @@ impl Member {
 
     /// A simulated vessel: its hull on board, driven by its own loop.
     pub async fn simulate(self: Arc<Self>, vessel: VesselConfig, stop: CancellationToken) {
-        if let Err(e) = run_vessel(self.shared.clone(), self.session.clone(), vessel.clone(), stop).await {
+        if let Err(e) = run_vessel(
+            self.shared.clone(),
+            self.session.clone(),
+            vessel.clone(),
+            stop,
+        )
+        .await
+        {
             tracing::error!(vessel = %vessel.id, error = %e, "peer vessel stopped");
         }
     }
@@ -284,7 +301,13 @@ pub async fn run(
     shutdown: CancellationToken,
 ) -> Result<(), PeerError> {
     let tasks = TaskTracker::new();
-    let member = Member::join(config, vessels.iter().map(|v| v.id.clone()), &tasks, &shutdown).await?;
+    let member = Member::join(
+        config,
+        vessels.iter().map(|v| v.id.clone()),
+        &tasks,
+        &shutdown,
+    )
+    .await?;
     tracing::info!(vessels = vessels.len(), "peer vessels starting");
     for vessel in vessels {
         tasks.spawn(member.clone().simulate(vessel, shutdown.clone()));
@@ -363,7 +386,13 @@ impl Declared {
     }
 
     async fn answer(&self, shared: &Shared, query: zenoh::query::Query) {
-        let doc = status_document(shared, &self.id, &self.current, self.controlled, self.partition);
+        let doc = status_document(
+            shared,
+            &self.id,
+            &self.current,
+            self.controlled,
+            self.partition,
+        );
         let json = serde_json::to_vec(&doc).expect("documents serialize");
         let _ = query.reply(shared.keys.status(&self.id), json).await;
     }
@@ -382,18 +411,32 @@ impl Declared {
 
     /// One tick of the loop on board at mission time `t`; `None` without a
     /// mission (the vessel then holds).
-    fn step(&mut self, shared: &Shared, own: &crate::control::model::State, t: f64) -> Option<crate::protocol::CommandDocument> {
+    fn step(
+        &mut self,
+        shared: &Shared,
+        own: &crate::control::model::State,
+        t: f64,
+    ) -> Option<crate::protocol::CommandDocument> {
         let actuator = self.actuator();
         let (Some(rev), Some(g)) = (&self.current, self.guidance.as_mut()) else {
             self.controlled = false;
             return None;
         };
-        let neighbours = shared
-            .table
-            .lock()
-            .expect("table lock")
-            .neighbours(&self.id, Instant::now(), &shared.config.ageing);
-        let step = super::step::step(&rev.mission, own, actuator, &neighbours, g, t, self.ticks, &mut self.scratch);
+        let neighbours = shared.table.lock().expect("table lock").neighbours(
+            &self.id,
+            Instant::now(),
+            &shared.config.ageing,
+        );
+        let step = super::step::step(
+            &rev.mission,
+            own,
+            actuator,
+            &neighbours,
+            g,
+            t,
+            self.ticks,
+            &mut self.scratch,
+        );
         self.ticks += 1;
         self.partition = step.partition;
         Some(step.command)
@@ -401,7 +444,12 @@ impl Declared {
 
     /// Publishes the beacon of `s`: express and dropped on congestion, so
     /// it never waits on a slow link.
-    async fn beacon(&mut self, shared: &Shared, s: &crate::control::model::State, controlled: bool) {
+    async fn beacon(
+        &mut self,
+        shared: &Shared,
+        s: &crate::control::model::State,
+        controlled: bool,
+    ) {
         self.controlled = controlled;
         let (k, beta) = self.actuator();
         let doc = BeaconDocument {

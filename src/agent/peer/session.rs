@@ -80,7 +80,11 @@ fn resolve_dictionary(config: &mut zenoh::Config, path: &std::path::Path) -> Res
     let beside = file.file_name().map(|name| dir.join(name));
     let moved = file.is_absolute() && !file.exists() && beside.as_ref().is_some_and(|b| b.exists());
     if file.is_relative() || moved {
-        let full = if moved { beside.expect("checked") } else { dir.join(file) };
+        let full = if moved {
+            beside.expect("checked")
+        } else {
+            dir.join(file)
+        };
         let value = serde_json::to_string(&full.to_string_lossy()).expect("strings serialize");
         config.insert_json5(KEY, &value).map_err(bad)?;
     }

@@ -12,10 +12,10 @@
 //! engine's next step) but kept as traffic. Pure: no I/O, no clock.
 
 use super::table::Neighbour;
+use crate::control::Vec3;
 use crate::control::barrier::{Margin, Scratch};
 use crate::control::guidance::Guidance;
 use crate::control::model::State;
-use crate::control::Vec3;
 use crate::coverage::range::local_cell;
 use crate::coverage::{CellResult, Options, Vessel};
 use crate::geometry::Point;

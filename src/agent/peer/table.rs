@@ -268,16 +268,31 @@ mod tests {
         let mut table = Table::new("bay", ["me".to_string()]);
         let t0 = Instant::now();
         let utc = 1.8e9;
-        table.offer("seacover/bay/beacon/a", &beacon("a", utc, 10.0), false, t0, utc, &ageing);
+        table.offer(
+            "seacover/bay/beacon/a",
+            &beacon("a", utc, 10.0),
+            false,
+            t0,
+            utc,
+            &ageing,
+        );
         let n = table.neighbours("me", t0 + Duration::from_secs(1), &ageing);
         assert_eq!(n.len(), 1);
         assert!(n[0].silent.is_none());
-        assert!((n[0].beacon.x - 11.0).abs() < 1e-3, "extrapolated: {}", n[0].beacon.x);
+        assert!(
+            (n[0].beacon.x - 11.0).abs() < 1e-3,
+            "extrapolated: {}",
+            n[0].beacon.x
+        );
         let n = table.neighbours("me", t0 + Duration::from_secs(10), &ageing);
         let radius = n[0].silent.unwrap().radius;
         assert!((radius - 12.0).abs() < 1e-3, "{radius}");
         assert_eq!(n[0].beacon.x, 10.0);
-        assert!(table.neighbours("me", t0 + Duration::from_secs(61), &ageing).is_empty());
+        assert!(
+            table
+                .neighbours("me", t0 + Duration::from_secs(61), &ageing)
+                .is_empty()
+        );
     }
 
     #[test]
@@ -286,8 +301,22 @@ mod tests {
         let mut table = Table::new("bay", []);
         let t0 = Instant::now();
         // Stamped 5 s in the future, and 5 s in the past.
-        table.offer("seacover/bay/beacon/a", &beacon("a", 1.8e9 + 5.0, 0.0), false, t0, 1.8e9, &ageing);
-        table.offer("seacover/bay/beacon/b", &beacon("b", 1.8e9 - 5.0, 0.0), false, t0, 1.8e9, &ageing);
+        table.offer(
+            "seacover/bay/beacon/a",
+            &beacon("a", 1.8e9 + 5.0, 0.0),
+            false,
+            t0,
+            1.8e9,
+            &ageing,
+        );
+        table.offer(
+            "seacover/bay/beacon/b",
+            &beacon("b", 1.8e9 - 5.0, 0.0),
+            false,
+            t0,
+            1.8e9,
+            &ageing,
+        );
         let ages = table.ages(t0, &ageing);
         assert_eq!(ages["a"], 0.0);
         assert_eq!(ages["b"], MAX_TRANSIT);
@@ -299,12 +328,47 @@ mod tests {
         let mut table = Table::new("bay", ["me".to_string()]);
         let t0 = Instant::now();
         let utc = 1.8e9;
-        table.offer("seacover/bay/beacon/a", &beacon("a", utc, 0.0), false, t0, utc, &ageing);
+        table.offer(
+            "seacover/bay/beacon/a",
+            &beacon("a", utc, 0.0),
+            false,
+            t0,
+            utc,
+            &ageing,
+        );
         // Someone else claims "a" 500 m away a second later; another claims "me".
-        table.offer("seacover/bay/beacon/a", &beacon("a", utc + 1.0, 500.0), false, t0, utc, &ageing);
-        table.offer("seacover/bay/beacon/me", &beacon("me", utc, 0.0), false, t0, utc, &ageing);
-        table.offer("seacover/sea/beacon/b", &beacon("b", utc, 0.0), false, t0, utc, &ageing);
-        table.offer("seacover/bay/beacon/c", b"not cbor", false, t0, utc, &ageing);
+        table.offer(
+            "seacover/bay/beacon/a",
+            &beacon("a", utc + 1.0, 500.0),
+            false,
+            t0,
+            utc,
+            &ageing,
+        );
+        table.offer(
+            "seacover/bay/beacon/me",
+            &beacon("me", utc, 0.0),
+            false,
+            t0,
+            utc,
+            &ageing,
+        );
+        table.offer(
+            "seacover/sea/beacon/b",
+            &beacon("b", utc, 0.0),
+            false,
+            t0,
+            utc,
+            &ageing,
+        );
+        table.offer(
+            "seacover/bay/beacon/c",
+            b"not cbor",
+            false,
+            t0,
+            utc,
+            &ageing,
+        );
         let refused = table.refused();
         assert_eq!(refused["id_conflict"], 2);
         assert_eq!(refused["other_fleet"], 1);

@@ -230,7 +230,11 @@ mod tests {
         any.k = 0.5;
         any.beta = 0.001;
         any.rev = 65_535;
-        assert!(encode(&any).len() <= MAX_BEACON, "{} bytes", encode(&any).len());
+        assert!(
+            encode(&any).len() <= MAX_BEACON,
+            "{} bytes",
+            encode(&any).len()
+        );
     }
 
     #[test]
@@ -241,14 +245,18 @@ mod tests {
             ..worst("usv-1")
         };
         let bytes = encode(&b);
-        let back = decode(&bytes, "usv-1").unwrap_or_else(|e| panic!("{e:?}, {} bytes", bytes.len()));
+        let back =
+            decode(&bytes, "usv-1").unwrap_or_else(|e| panic!("{e:?}, {} bytes", bytes.len()));
         assert_eq!(back.t, b.t);
         assert!((back.x - b.x).abs() < 4e-3 && (back.y - b.y).abs() < 4e-3);
         assert!((back.psi - b.psi).abs() <= 2e-3);
         assert!((back.u - b.u).abs() <= 1e-3 * 20.0);
         assert!((back.k - b.k).abs() <= 1e-3 * b.k);
         assert!((back.beta - b.beta).abs() <= 1e-3 * b.beta);
-        assert_eq!((back.seq, back.rev, back.controlled), (b.seq, b.rev, b.controlled));
+        assert_eq!(
+            (back.seq, back.rev, back.controlled),
+            (b.seq, b.rev, b.controlled)
+        );
     }
 
     #[test]
@@ -262,12 +270,28 @@ mod tests {
         assert_eq!(decode(b"\x01\x02", "usv-1"), Err(Refusal::Undecodable));
         assert_eq!(decode(&encode(&good), "usv-2"), Err(Refusal::Undecodable));
         for bad in [
-            BeaconDocument { x: 60_000.0, ..good.clone() },
-            BeaconDocument { u: 25.0, ..good.clone() },
-            BeaconDocument { y: f64::NAN, ..good.clone() },
-            BeaconDocument { beta: -1.0, ..good.clone() },
+            BeaconDocument {
+                x: 60_000.0,
+                ..good.clone()
+            },
+            BeaconDocument {
+                u: 25.0,
+                ..good.clone()
+            },
+            BeaconDocument {
+                y: f64::NAN,
+                ..good.clone()
+            },
+            BeaconDocument {
+                beta: -1.0,
+                ..good.clone()
+            },
         ] {
-            assert_eq!(decode(&encode(&bad), "usv-1"), Err(Refusal::OutOfRange), "{bad:?}");
+            assert_eq!(
+                decode(&encode(&bad), "usv-1"),
+                Err(Refusal::OutOfRange),
+                "{bad:?}"
+            );
         }
         // A map with a key more is not a beacon.
         let mut extra = Vec::new();
@@ -276,12 +300,22 @@ mod tests {
             m.push(("extra".into(), 1.into()));
         }
         ciborium::into_writer(&value, &mut extra).unwrap();
-        assert_eq!(decode(&extra, "usv-1").unwrap_err(), if extra.len() > MAX_BEACON { Refusal::Oversized } else { Refusal::Undecodable });
+        assert_eq!(
+            decode(&extra, "usv-1").unwrap_err(),
+            if extra.len() > MAX_BEACON {
+                Refusal::Oversized
+            } else {
+                Refusal::Undecodable
+            }
+        );
     }
 
     #[test]
     fn beacon_keys_parse() {
-        assert_eq!(Keys::parse_beacon("seacover/bay/beacon/usv-1"), Some(("bay", "usv-1")));
+        assert_eq!(
+            Keys::parse_beacon("seacover/bay/beacon/usv-1"),
+            Some(("bay", "usv-1"))
+        );
         assert_eq!(Keys::parse_beacon("seacover/bay/alive/usv-1"), None);
     }
 }

@@ -173,7 +173,12 @@ mod tests {
         .unwrap();
         let vessels = fleet(300, side, 7);
         let options = Options::default();
-        let all = evaluate(&region, &risk, &Fleet::new(vessels.clone()).unwrap(), &options);
+        let all = evaluate(
+            &region,
+            &risk,
+            &Fleet::new(vessels.clone()).unwrap(),
+            &options,
+        );
         let r = reach(0.001);
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
         let mut left_out = 0;
@@ -191,7 +196,11 @@ mod tests {
             for _ in 0..400 {
                 let a = rng.random_range(0.0..std::f64::consts::TAU);
                 let d = r * rng.random_range(0.0f64..1.0).sqrt();
-                let q = own.position + Point { x: a.cos(), y: a.sin() } * d;
+                let q = own.position
+                    + Point {
+                        x: a.cos(),
+                        y: a.sin(),
+                    } * d;
                 if region.contains(q) {
                     assert_eq!(
                         local.geometry.contains(q),
@@ -211,6 +220,9 @@ mod tests {
             let shift = norm2(local.centroid - central.centroid).sqrt();
             assert!(shift < 1e-3, "vessel {i}: centroid moved {shift} m");
         }
-        assert!(left_out > 1000, "the fleet was not wide: {left_out} left out");
+        assert!(
+            left_out > 1000,
+            "the fleet was not wide: {left_out} left out"
+        );
     }
 }

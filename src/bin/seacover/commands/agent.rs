@@ -7,7 +7,12 @@ use crate::shell::{self, Preset};
 #[derive(clap::Args)]
 pub struct Args {
     /// Coordinator base URL, e.g. http://127.0.0.1:8080 (not with --peer).
-    #[arg(long, value_name = "URL", required_unless_present = "peer", conflicts_with = "peer")]
+    #[arg(
+        long,
+        value_name = "URL",
+        required_unless_present = "peer",
+        conflicts_with = "peer"
+    )]
     server: Option<String>,
     /// Be members of a peer fleet instead: every vessel computes its own
     /// cell from its neighbours' beacons over Zenoh; no coordinator needed
@@ -20,7 +25,12 @@ pub struct Args {
     #[arg(long, value_name = "FILE", requires = "peer")]
     mission: Option<std::path::PathBuf>,
     /// With --peer: the fleet's name, the Zenoh keys' second segment.
-    #[arg(long, value_name = "NAME", default_value = "seacover", requires = "peer")]
+    #[arg(
+        long,
+        value_name = "NAME",
+        default_value = "seacover",
+        requires = "peer"
+    )]
     fleet: String,
     /// With --peer and --id: where the vessel starts, in the mission's
     /// local plane [m] and heading [rad]: X,Y or X,Y,PSI.
@@ -101,7 +111,10 @@ async fn peer(args: Args) -> anyhow::Result<()> {
     shell::check_warp(args.time_warp)?;
     let mut vessels =
         seacover::agent::fleet(args.vessels, args.id, args.preset.params(), args.seed)?;
-    if let Some(v) = vessels.iter().find(|v| !seacover::agent::peer::wire::valid_peer_id(&v.id)) {
+    if let Some(v) = vessels
+        .iter()
+        .find(|v| !seacover::agent::peer::wire::valid_peer_id(&v.id))
+    {
         return Err(seacover::agent::peer::PeerError::Id(v.id.clone()).into());
     }
     if let Some((x, y, psi)) = args.start {
@@ -130,14 +143,22 @@ async fn bridge(args: Args) -> anyhow::Result<()> {
     // With --peer the bridge is each boat's peer node: one membership of
     // the fleet for all the boats it bridges.
     let peer = if args.peer {
-        if let Some(id) = args.id.as_ref().filter(|id| !seacover::agent::peer::wire::valid_peer_id(id)) {
+        if let Some(id) = args
+            .id
+            .as_ref()
+            .filter(|id| !seacover::agent::peer::wire::valid_peer_id(id))
+        {
             return Err(seacover::agent::peer::PeerError::Id(id.clone()).into());
         }
-        let mut config = seacover::agent::peer::PeerConfig::new(args.fleet.clone(), args.zenoh.options())?;
+        let mut config =
+            seacover::agent::peer::PeerConfig::new(args.fleet.clone(), args.zenoh.options())?;
         if let Some(path) = &args.mission {
             config.mission = Some(seacover::agent::peer::mission_file(path)?);
         }
-        Some(seacover::agent::peer::node::Member::join(config, args.id.clone(), &tasks, &stop).await?)
+        Some(
+            seacover::agent::peer::node::Member::join(config, args.id.clone(), &tasks, &stop)
+                .await?,
+        )
     } else {
         None
     };
@@ -167,10 +188,7 @@ async fn simulate(args: Args) -> anyhow::Result<()> {
     let vessels = seacover::agent::fleet(args.vessels, args.id, args.preset.params(), args.seed)?;
     let server = args.server.unwrap_or_default();
     let url = seacover::agent::link::link_url(&server).ok_or_else(|| {
-        anyhow::anyhow!(
-            "--server must be an http:// or ws:// URL, got {:?}",
-            server
-        )
+        anyhow::anyhow!("--server must be an http:// or ws:// URL, got {:?}", server)
     })?;
     let config = seacover::agent::AgentConfig {
         url,

@@ -46,7 +46,12 @@ pub struct Args {
     #[arg(long)]
     peer: bool,
     /// With --peer: the fleet's name.
-    #[arg(long, value_name = "NAME", default_value = "seacover", requires = "peer")]
+    #[arg(
+        long,
+        value_name = "NAME",
+        default_value = "seacover",
+        requires = "peer"
+    )]
     fleet: String,
     /// With --peer: `peer`, or `router` to route for members that reach
     /// this one over a routed network (LTE, VPN).
