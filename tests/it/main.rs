@@ -11,6 +11,7 @@ mod common;
 
 mod api_docs;
 mod architecture;
+mod ardupilot_peer;
 mod ardupilot_sitl;
 mod cli;
 mod dashboard;

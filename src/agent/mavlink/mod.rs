@@ -502,7 +502,7 @@ async fn run_vehicle(
                                     link_task = Some(match &peer {
                                         None => tokio::spawn(link::run(config, slot, tx, stop.clone())),
                                         // A peer node: the boat's own loop on board.
-                                        Some(m) => tokio::spawn(m.clone().link(config.vessel.clone(), slot, tx, stop.clone())),
+                                        Some(m) => tokio::spawn(m.clone().link(config.vessel.clone(), slot, tx, config.astern.unwrap_or(true), stop.clone())),
                                     });
                                 }
                             }

@@ -217,13 +217,20 @@ impl Member {
     /// A vessel whose hull is elsewhere (an autopilot behind the MAVLink
     /// bridge): its newest pose in `poses` (local plane), its commands out
     /// on `commands`, the same beacons, loop and rules as a simulated one.
-    /// Without a mission, or without a pose newer than [`POSE_STALE`], it
-    /// commands nothing, so the autopilot's own timeout stops the boat.
+    /// The loop runs on the hull's own clock (the poses' `t`, the
+    /// autopilot's boot time), once per mission tick of it, so its rate
+    /// limits hold in the boat's time whatever the simulator's speed-up;
+    /// `astern` false keeps the guidance ahead only (a Rover boat is given
+    /// a speed, never a direction of thrust), as the coordinator does for
+    /// a link that declares it. Without a mission, or without a pose newer
+    /// than [`POSE_STALE`], it commands nothing, so the autopilot's own
+    /// timeout stops the boat.
     pub async fn link(
         self: Arc<Self>,
         id: String,
         mut poses: watch::Receiver<Option<crate::protocol::PoseDocument>>,
         commands: tokio::sync::mpsc::Sender<crate::agent::link::Inbound>,
+        astern: bool,
         stop: CancellationToken,
     ) {
         self.claim(&id);
@@ -231,21 +238,29 @@ impl Member {
             tracing::error!(vessel = %id, "could not declare the vessel on the fleet");
             return;
         };
-        let started = Instant::now();
+        v.set_ahead_only(!astern);
+        let mut last_step: Option<f64> = None;
         let mut pose: Option<(crate::protocol::PoseDocument, Instant)> = None;
         let mut beacons =
             tokio::time::interval(Duration::from_secs_f64(1.0 / self.shared.config.beacon_hz));
         beacons.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
-        let mut control = tokio::time::interval(Duration::from_millis(100));
-        control.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
         loop {
             tokio::select! {
                 _ = stop.cancelled() => break,
                 changed = poses.changed() => {
                     if changed.is_err() { break }
-                    if let Some(p) = poses.borrow_and_update().clone() {
-                        pose = Some((p, Instant::now()));
+                    let Some(p) = poses.borrow_and_update().clone() else { continue };
+                    // One step per mission tick of the hull's own clock (a
+                    // clock that went back, a rebooted autopilot, restarts it).
+                    let period = v.current.as_ref().map_or(0.1, |r| 1.0 / r.mission.tick_hz);
+                    let due = last_step.is_none_or(|l| p.t - l >= period - 1e-6 || p.t < l);
+                    if due
+                        && let Some(command) = v.step(&self.shared, &state_of_pose(&p), p.t)
+                    {
+                        last_step = Some(p.t);
+                        let _ = commands.try_send(crate::agent::link::Inbound::Command(command));
                     }
+                    pose = Some((p, Instant::now()));
                 }
                 Ok(()) = v.missions.changed() => v.take_mission(),
                 Ok(query) = v.status.recv_async() => v.answer(&self.shared, query).await,
@@ -253,14 +268,6 @@ impl Member {
                     if let Some((p, at)) = &pose && at.elapsed() < POSE_STALE {
                         let controlled = p.controlled.unwrap_or(true) && v.current.is_some();
                         v.beacon(&self.shared, &state_of_pose(p), controlled).await;
-                    }
-                }
-                _ = control.tick() => {
-                    let fresh = pose.as_ref().filter(|(_, at)| at.elapsed() < POSE_STALE);
-                    if let Some((p, _)) = fresh
-                        && let Some(command) = v.step(&self.shared, &state_of_pose(p), started.elapsed().as_secs_f64())
-                    {
-                        let _ = commands.try_send(crate::agent::link::Inbound::Command(command));
                     }
                 }
             }
@@ -333,6 +340,8 @@ struct Declared {
     ticks: u64,
     partition: usize,
     controlled: bool,
+    /// The hull cannot go astern: its guidance is ahead only.
+    ahead_only: bool,
 }
 
 impl Declared {
@@ -374,15 +383,25 @@ impl Declared {
             ticks: 0,
             partition: 0,
             controlled: false,
+            ahead_only: false,
         })
     }
 
     fn take_mission(&mut self) {
         self.current = self.missions.borrow_and_update().clone();
-        self.guidance = self
-            .current
-            .as_ref()
-            .map(|r| Guidance::new(r.mission.guidance));
+        self.guidance = self.current.as_ref().map(|r| {
+            let mut g = Guidance::new(r.mission.guidance);
+            g.ahead_only = self.ahead_only;
+            g
+        });
+    }
+
+    /// Keeps the guidance ahead only (a hull that cannot go astern).
+    fn set_ahead_only(&mut self, ahead_only: bool) {
+        self.ahead_only = ahead_only;
+        if let Some(g) = self.guidance.as_mut() {
+            g.ahead_only = ahead_only;
+        }
     }
 
     async fn answer(&self, shared: &Shared, query: zenoh::query::Query) {

@@ -16,3 +16,4 @@ pub mod netns;
 pub mod peer;
 pub mod process;
 pub mod server;
+pub mod sitl;

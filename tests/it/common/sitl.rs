@@ -1,0 +1,444 @@
+//! ArduPilot Rover SITL boats for the tests that run the MAVLink bridge
+//! against ArduPilot's own simulator (`ardupilot_sitl`, `ardupilot_peer`,
+//! `sitl_script`): the binary and its parameter files, boats started as
+//! processes on free instances, positions placed and read back by
+//! geographiclib, `seacover agent --mavlink …` as a process with its JSON log
+//! collected, and an operator's ground station on a boat's second MAVLink
+//! port ([`Station`]), which is what the tests judge by.
+//!
+//! SITL runs at [`SPEEDUP`]; durations of the boats' world are read on
+//! ArduPilot's own clock (`time_boot_ms`). Without a binary the tests say so
+//! and pass, except under `CI=true`, where they fail ([`ardupilot`]).
+
+use std::collections::BTreeMap;
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use mavlink::dialects::ardupilotmega::{
+    COMMAND_LONG_DATA, GLOBAL_POSITION_INT_DATA, MavCmd, MavMessage, MavModeFlag,
+};
+use mavlink::{AsyncMavConnection, MavHeader};
+
+/// The boats' clock against the wall clock (SITL's `--speedup`).
+pub const SPEEDUP: u32 = 4;
+/// The mission's origin: ArduPilot's test field at Canberra.
+pub const ORIGIN: (f64, f64) = (-35.363261, 149.165230);
+/// One SITL fleet at a time: the two tests share two cores.
+pub static SITL: tokio::sync::Mutex<()> = tokio::sync::Mutex::const_new(());
+
+pub struct Ardupilot {
+    pub binary: PathBuf,
+    pub defaults: String,
+}
+
+pub fn ardupilot() -> Option<Ardupilot> {
+    let binary = match std::env::var_os("ARDUPILOT_SITL") {
+        Some(p) => PathBuf::from(p),
+        None => Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/ardupilot/ardurover"),
+    };
+    if !binary.is_file() {
+        let why = format!(
+            "no ArduPilot SITL binary at {} (set ARDUPILOT_SITL; docs/ardupilot.md says how to build it)",
+            binary.display()
+        );
+        assert!(
+            std::env::var("CI").as_deref() != Ok("true"),
+            "{why}: required under CI=true"
+        );
+        eprintln!("skipped: {why}");
+        return None;
+    }
+    let defaults = std::env::var("ARDUPILOT_DEFAULTS").ok().unwrap_or_else(|| {
+        let dir = binary.parent().unwrap();
+        let beside = [dir.join("rover.parm"), dir.join("motorboat.parm")];
+        let tree = dir.join("../../../Tools/autotest/default_params");
+        let in_tree = [tree.join("rover.parm"), tree.join("motorboat.parm")];
+        let files = if beside.iter().all(|p| p.is_file()) {
+            beside
+        } else {
+            in_tree
+        };
+        files
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect::<Vec<_>>()
+            .join(",")
+    });
+    Some(Ardupilot { binary, defaults })
+}
+
+/// A running SITL boat.
+pub struct Boat {
+    pub child: Child,
+    pub sysid: u8,
+    /// The bridge's port (SITL's SERIAL0).
+    pub primary: u16,
+    /// A ground station's port.
+    pub second: u16,
+    _dir: tempfile::TempDir,
+}
+
+impl Drop for Boat {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// SITL instance numbers (ports 5760 + 10 I and 5762 + 10 I), taken from a
+/// range no default SITL uses, skipping any whose ports are busy.
+pub fn instance() -> u32 {
+    static NEXT: AtomicU32 = AtomicU32::new(40);
+    loop {
+        let i = NEXT.fetch_add(1, Ordering::Relaxed);
+        let free = |p: u32| std::net::TcpListener::bind(("127.0.0.1", p as u16)).is_ok();
+        if free(5760 + 10 * i) && free(5762 + 10 * i) {
+            return i;
+        }
+    }
+}
+
+/// Starts boat `sysid` at `home` (lat, lon) heading `heading_deg`, as
+/// `start-boats` does.
+pub fn boat(ap: &Ardupilot, sysid: u8, home: (f64, f64), heading_deg: f64) -> Boat {
+    let i = instance();
+    let dir = tempfile::tempdir().unwrap();
+    let child = Command::new(&ap.binary)
+        .args(["--model", "motorboat", "--defaults", &ap.defaults])
+        .arg("--home")
+        .arg(format!("{:.7},{:.7},0,{heading_deg}", home.0, home.1))
+        .arg(format!("-I{i}"))
+        .args([
+            "--sysid",
+            &sysid.to_string(),
+            "-w",
+            "--speedup",
+            &SPEEDUP.to_string(),
+        ])
+        .current_dir(dir.path())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    Boat {
+        child,
+        sysid,
+        primary: (5760 + 10 * i) as u16,
+        second: (5762 + 10 * i) as u16,
+        _dir: dir,
+    }
+}
+
+/// The point `distance` m from the origin on bearing `azimuth` (degrees
+/// clockwise from north), by geographiclib.
+pub fn place(distance: f64, azimuth: f64) -> (f64, f64) {
+    let a = azimuth.to_radians();
+    crate::common::geo::place(ORIGIN, distance * a.sin(), distance * a.cos())
+}
+
+/// East and north [m] of a WGS84 position from the origin, by geographiclib.
+pub fn east_north(lat: f64, lon: f64) -> (f64, f64) {
+    crate::common::geo::locate(ORIGIN, lat, lon)
+}
+
+/// `seacover agent --mavlink …` as a process, its JSON log collected.
+pub struct Bridge {
+    pub child: Child,
+    pub log: Arc<Mutex<Vec<serde_json::Value>>>,
+}
+
+impl Bridge {
+    /// A bridge of `endpoints` onto the coordinator at `server`, with
+    /// `--arm`.
+    pub fn start(server: &str, endpoints: &[String]) -> Bridge {
+        let mut args: Vec<String> = ["--server", server, "--arm"].map(String::from).to_vec();
+        for e in endpoints {
+            args.extend(["--mavlink".to_string(), e.clone()]);
+        }
+        Bridge::agent(&args)
+    }
+
+    /// `seacover --log-format json agent ARGS…` at `RUST_LOG=info`.
+    pub fn agent(args: &[String]) -> Bridge {
+        let mut command = Command::new(env!("CARGO_BIN_EXE_seacover"));
+        command
+            .args(["--log-format", "json", "agent"])
+            .args(args)
+            .env("RUST_LOG", "info")
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped());
+        let mut child = command.spawn().unwrap();
+        let log = Arc::new(Mutex::new(Vec::new()));
+        let stderr = child.stderr.take().unwrap();
+        let sink = log.clone();
+        std::thread::spawn(move || {
+            for line in BufReader::new(stderr).lines() {
+                let Ok(line) = line else { break };
+                if let Ok(v) = serde_json::from_str(&line) {
+                    sink.lock().unwrap().push(v);
+                }
+            }
+        });
+        Bridge { child, log }
+    }
+
+    /// SIGTERM, then the log's last "bridge stopped" line's fields.
+    pub fn stop(mut self) -> serde_json::Value {
+        crate::common::process::signal(self.child.id(), "-TERM");
+        let exit = self.child.wait().unwrap();
+        assert!(exit.success(), "the bridge exited with {exit}");
+        std::thread::sleep(Duration::from_millis(200));
+        let log = self.log.lock().unwrap();
+        log.iter()
+            .rev()
+            .find(|l| {
+                l["fields"]["message"]
+                    .as_str()
+                    .is_some_and(|m| m.starts_with("bridge stopped"))
+            })
+            .map(|l| l["fields"].clone())
+            .expect("the bridge logs its refusals when it stops")
+    }
+
+    /// The log lines whose message starts with `prefix`.
+    pub fn logged(&self, prefix: &str) -> Vec<serde_json::Value> {
+        self.log
+            .lock()
+            .unwrap()
+            .iter()
+            .filter(|l| {
+                l["fields"]["message"]
+                    .as_str()
+                    .is_some_and(|m| m.starts_with(prefix))
+            })
+            .cloned()
+            .collect()
+    }
+}
+
+impl Drop for Bridge {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+#[derive(Default)]
+pub struct Seen {
+    pub mode: Option<u32>,
+    pub armed: bool,
+    /// GLOBAL_POSITION_INT by time_boot_ms.
+    pub positions: BTreeMap<u32, GLOBAL_POSITION_INT_DATA>,
+    /// (yaw, yawspeed) by time_boot_ms.
+    pub attitudes: BTreeMap<u32, (f32, f32)>,
+    /// STATUSTEXT messages, with the newest position's time_boot_ms when
+    /// each arrived (the message has no time of its own).
+    pub texts: Vec<(u32, String)>,
+}
+
+impl Seen {
+    pub fn latest(&self) -> Option<&GLOBAL_POSITION_INT_DATA> {
+        self.positions.values().next_back()
+    }
+    pub fn clock_ms(&self) -> u32 {
+        self.positions.keys().next_back().copied().unwrap_or(0)
+    }
+    pub fn speed(&self) -> f64 {
+        self.latest()
+            .map_or(0.0, |p| f64::from(p.vx).hypot(f64::from(p.vy)) / 100.0)
+    }
+}
+
+/// An operator's ground station on a boat's second MAVLink port.
+pub struct Station {
+    pub sysid: u8,
+    connection: Arc<mavlink::AsyncConnection<MavMessage>>,
+    seen: Arc<Mutex<Seen>>,
+}
+
+pub const STATION_SYSID: u8 = 250;
+
+impl Station {
+    pub async fn open(boat: &Boat) -> Station {
+        let address = format!("tcpout:127.0.0.1:{}", boat.second);
+        let began = Instant::now();
+        let connection = loop {
+            match mavlink::connect_async::<MavMessage>(&address).await {
+                Ok(c) => break Arc::new(c),
+                Err(e) if began.elapsed() < Duration::from_secs(20) => {
+                    let _ = e;
+                    tokio::time::sleep(Duration::from_millis(200)).await;
+                }
+                Err(e) => panic!("{address}: {e}"),
+            }
+        };
+        let seen = Arc::new(Mutex::new(Seen::default()));
+        let (reader, sink, sysid) = (connection.clone(), seen.clone(), boat.sysid);
+        tokio::spawn(async move {
+            while let Ok((header, message)) = reader.recv().await {
+                if header.system_id != u32::from(sysid) || header.component_id != 1 {
+                    continue;
+                }
+                let mut s = sink.lock().unwrap();
+                match message {
+                    MavMessage::HEARTBEAT(hb) => {
+                        s.mode = Some(hb.custom_mode);
+                        s.armed = hb
+                            .base_mode
+                            .contains(MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED);
+                    }
+                    MavMessage::GLOBAL_POSITION_INT(p) if p.lat != 0 => {
+                        s.positions.insert(p.time_boot_ms, p);
+                    }
+                    MavMessage::ATTITUDE(a) => {
+                        s.attitudes.insert(a.time_boot_ms, (a.yaw, a.yawspeed));
+                    }
+                    MavMessage::STATUSTEXT(t) => {
+                        let end = t.text.iter().position(|&c| c == 0).unwrap_or(t.text.len());
+                        let text = String::from_utf8_lossy(&t.text[..end]).into_owned();
+                        let at = s.clock_ms();
+                        s.texts.push((at, text));
+                    }
+                    _ => {}
+                }
+            }
+        });
+        let station = Station {
+            sysid,
+            connection,
+            seen,
+        };
+        // The same rates the bridge asks for on its own link.
+        for id in [33.0, 30.0] {
+            station
+                .command(MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL, id, 100_000.0)
+                .await;
+        }
+        station
+    }
+
+    pub async fn command(&self, command: MavCmd, param1: f32, param2: f32) {
+        let header = MavHeader {
+            system_id: u32::from(STATION_SYSID),
+            component_id: 190,
+            sequence: 0,
+        };
+        let message = MavMessage::COMMAND_LONG(COMMAND_LONG_DATA {
+            command,
+            param1,
+            param2,
+            target_system: self.sysid,
+            target_component: 1,
+            ..Default::default()
+        });
+        self.connection.send(&header, &message).await.unwrap();
+    }
+
+    pub async fn set_mode(&self, mode: u32) {
+        let flag = MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED.bits() as f32;
+        self.command(MavCmd::MAV_CMD_DO_SET_MODE, flag, mode as f32)
+            .await;
+    }
+
+    pub fn seen<T>(&self, f: impl FnOnce(&Seen) -> T) -> T {
+        f(&self.seen.lock().unwrap())
+    }
+}
+
+/// Polls `check` every 50 ms until it holds or `limit` passes.
+pub async fn wait_for<T>(limit: Duration, mut check: impl AsyncFnMut() -> Option<T>) -> Option<T> {
+    let began = Instant::now();
+    loop {
+        if let Some(t) = check().await {
+            return Some(t);
+        }
+        if began.elapsed() > limit {
+            return None;
+        }
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+}
+
+/// Waits (10 s at most) until every boat reports below 0.3 m/s, then says
+/// when that was, from ArduPilot's own record rather than from when this
+/// loop looked (at speedup 4 a late look is four times as late): the first
+/// moment after `since` (each boat's clock) at which every boat's newest
+/// report said below 0.3 m/s [s].
+pub async fn all_stopped(stations: &[Station], since: &[u32]) -> f64 {
+    wait_for(Duration::from_secs(10), async || {
+        stations
+            .iter()
+            .all(|s| s.seen(Seen::speed) < 0.3)
+            .then_some(())
+    })
+    .await
+    .expect("every boat below 0.3 m/s");
+    let records: Vec<BTreeMap<u32, f64>> = stations
+        .iter()
+        .zip(since)
+        .map(|(s, k)| {
+            s.seen(|s| {
+                s.positions
+                    .range(*k..)
+                    .map(|(t, p)| (t - k, f64::from(p.vx).hypot(f64::from(p.vy)) / 100.0))
+                    .collect()
+            })
+        })
+        .collect();
+    let mut moments: Vec<u32> = records.iter().flat_map(|r| r.keys().copied()).collect();
+    moments.sort_unstable();
+    moments
+        .into_iter()
+        .find(|&after| {
+            records
+                .iter()
+                .all(|r| r.range(..=after).next_back().is_some_and(|(_, v)| *v < 0.3))
+        })
+        .map(|after| f64::from(after) / 1000.0)
+        .expect("every boat's record shows it below 0.3 m/s")
+}
+
+/// Waits (20 s at most) until some boat goes faster than `speed` [m/s].
+pub async fn under_way(stations: &[Station], speed: f64, what: &str) {
+    wait_for(Duration::from_secs(20), async || {
+        stations
+            .iter()
+            .any(|s| s.seen(Seen::speed) > speed)
+            .then_some(())
+    })
+    .await
+    .expect(what);
+}
+
+/// The mission of the SITL tests, as a `seacover serve --config` TOML: the
+/// origin, a 200 m square round it, two risk objects, and the guidance's
+/// speed below the boats' `WP_SPEED`.
+pub fn mission_toml() -> String {
+    format!(
+        r#"tick_hz = 10.0
+origin = {{ lat = {}, lon = {} }}
+[region]
+polygon = [[-100, -100], [100, -100], [100, 100], [-100, 100]]
+[risk]
+base = 0.1
+objects = [
+    {{ id = "wreck", x = -50, y = 40, alpha = 10, sigma = 20 }},
+    {{ id = "reef", x = 45, y = -35, alpha = 8, sigma = 25 }},
+]
+[guidance]
+max_speed = 2.0
+"#,
+        ORIGIN.0, ORIGIN.1
+    )
+}
+
+/// [`mission_toml`] written to `dir/mission.toml`.
+pub fn mission(dir: &Path) -> PathBuf {
+    let path = dir.join("mission.toml");
+    std::fs::write(&path, mission_toml()).unwrap();
+    path
+}
