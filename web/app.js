@@ -170,14 +170,30 @@ function onSnapshot(snap) {
 
 function drawTable(snap) {
   const body = $("vessels").tBodies[0];
-  const ids = snap.vessels.map((v) => v.id).join("\n");
+  // A peer fleet (serve --peer) has one more column: each vessel's own
+  // neighbour count, as it reports it.
+  const peer = snap.vessels.some((v) => v.neighbours != null);
+  const head = $("vessels").tHead.rows[0];
+  if ((head.cells.length > 5) !== peer) {
+    if (peer) {
+      const th = document.createElement("th");
+      th.className = "num";
+      th.title = "the neighbours in the vessel's own partition, as it reports them (peer fleet)";
+      th.textContent = "nbrs";
+      head.appendChild(th);
+    } else {
+      head.deleteCell(5);
+    }
+  }
+  const ids = snap.vessels.map((v) => v.id).join("\n") + (peer ? "\npeer" : "");
   // Rows are rebuilt only when the fleet changes; otherwise their cells are
   // updated in place, so a row under the pointer stays the same element.
   if (body.dataset.ids !== ids) {
     body.dataset.ids = ids;
     body.innerHTML = snap.vessels
       .map((v) => `<tr data-vessel-id="${escape(v.id)}"><td>${escape(v.id)}</td><td></td>`
-        + '<td class="num"></td><td class="num"></td><td class="num"></td><td class="num"></td></tr>')
+        + '<td class="num"></td><td class="num"></td><td class="num"></td>'
+        + (peer ? '<td class="num"></td>' : "") + "</tr>")
       .join("");
   }
   snap.vessels.forEach((v, i) => {
@@ -194,7 +210,7 @@ function drawTable(snap) {
     cells[2].textContent = v.last_command ? v.last_command.E.toFixed(2) : "–";
     cells[3].textContent = v.pose ? Math.hypot(v.pose.u, v.pose.v).toFixed(2) : "–";
     cells[4].textContent = v.last_seen == null ? "never" : Math.max(0, snap.time - v.last_seen).toFixed(1);
-    cells[5].textContent = v.neighbours == null ? "–" : String(v.neighbours);
+    if (peer) cells[5].textContent = v.neighbours == null ? "–" : String(v.neighbours);
     row.classList.toggle("selected", v.id === state.selectedVessel);
   });
   $("vessel-count").textContent = `(${snap.vessels.length})`;
