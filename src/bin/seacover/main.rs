@@ -70,6 +70,7 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    shell::zenoh_runtime();
     let cli = Cli::parse();
     let quiet = matches!(cli.command, Command::Evaluate(_) | Command::Sim(_));
     let filter = tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| {

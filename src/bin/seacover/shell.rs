@@ -148,3 +148,21 @@ impl ZenohArgs {
         }
     }
 }
+
+/// Zenoh's worker pools, unless `ZENOH_RUNTIME` says otherwise: its
+/// defaults (2 receive workers, 1 transmit, 1 network) stop all receiving
+/// for 10 s when TCP links to vanished peers are closed (Zenoh lingers on
+/// each close for 10 s), which a peer fleet whose neighbours drop out of
+/// radio range cannot afford. Set before any thread starts.
+pub fn zenoh_runtime() {
+    if std::env::var_os("ZENOH_RUNTIME").is_none() {
+        // SAFETY: called first thing in `main`, before any other thread
+        // exists that could read the environment.
+        unsafe {
+            std::env::set_var(
+                "ZENOH_RUNTIME",
+                "(rx: (worker_threads: 16), tx: (worker_threads: 16), net: (worker_threads: 16))",
+            );
+        }
+    }
+}

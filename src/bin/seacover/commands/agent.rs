@@ -124,6 +124,8 @@ async fn peer(args: Args) -> anyhow::Result<()> {
     }
     let mut config = seacover::agent::peer::PeerConfig::new(args.fleet, args.zenoh.options())?;
     config.time_warp = args.time_warp;
+    // Beacons are aged in mission seconds.
+    config.ageing.warp = args.time_warp;
     if let Some(path) = &args.mission {
         config.mission = Some(seacover::agent::peer::mission_file(path)?);
     }
