@@ -26,9 +26,11 @@
 //!
 //! ## Cost
 //! Selecting neighbours is one distance test per vessel heard; the cell
-//! is then the partition of the few relevant vessels, so at a fixed
-//! density one node's cost does not grow with the fleet
-//! (`cargo bench --bench peer`).
+//! is then the partition of every relevant vessel (~140 at the paper's
+//! density), of which one cell is kept: the cost is bounded by the
+//! density, not the fleet, but partitioning only the ~15 neighbours that
+//! bound the cell would give it ~24× faster (`cargo bench --bench peer`,
+//! docs/performance.md).
 
 use super::density::RiskField;
 use super::evaluate::{CellResult, Options, cell_figures};
