@@ -49,6 +49,15 @@ impl ZenohOptions {
             config
                 .insert_json5("listen/endpoints", &list(&self.listen))
                 .map_err(bad)?;
+        } else if self.mode == Mode::Peer && !chose(&config, LISTEN) {
+            config
+                .insert_json5(LISTEN, &list(&[PEER_LISTEN.to_string()]))
+                .map_err(bad)?;
+        }
+        if !chose(&config, LEASE) {
+            config
+                .insert_json5(LEASE, &PEER_LEASE_MS.to_string())
+                .map_err(bad)?;
         }
         if !self.connect.is_empty() {
             config
@@ -57,6 +66,35 @@ impl ZenohOptions {
         }
         Ok(config)
     }
+}
+
+/// A peer's endpoint when neither the flags nor the file give one: UDP,
+/// because a beacon is worthless once the next is due. Over TCP a lost
+/// segment holds up everything behind it, a link cut by range backs off
+/// its retransmissions for seconds after the pair is back in range, and
+/// the acknowledgements alone cost more than the 1 kB/s per neighbour a
+/// radio budget allows (measured: docs/peer.md, "Radio budgets"). What
+/// needs to arrive whole (a mission revision) is asked for again until it
+/// does, so nothing relies on retransmission.
+pub const PEER_LISTEN: &str = "udp/0.0.0.0:0";
+
+const LISTEN: &str = "listen/endpoints";
+const LEASE: &str = "transport/link/tx/lease";
+
+/// How long a member keeps a link to another that it no longer hears
+/// [ms]: as long as a silent neighbour is kept as an obstacle
+/// ([`Ageing::forget_after`](super::table::Ageing)), not Zenoh's 10 s. A
+/// boat that leaves radio range and comes back finds its link still open
+/// and is heard again with its next beacon; a link that closed would wait
+/// for multicast scouting, which backs off to one attempt every 8 s.
+/// Staleness is judged by beacon age, never by the link.
+pub const PEER_LEASE_MS: u64 = 60_000;
+
+/// Whether a configuration file chose `key`: Zenoh's defaults fill in
+/// whatever a file leaves out, so a file chose it when it differs from
+/// the default.
+fn chose(config: &zenoh::Config, key: &str) -> bool {
+    config.get_json(key).ok() != zenoh::Config::default().get_json(key).ok()
 }
 
 fn bad(e: impl std::fmt::Display) -> PeerError {
@@ -89,4 +127,54 @@ fn resolve_dictionary(config: &mut zenoh::Config, path: &std::path::Path) -> Res
         config.insert_json5(KEY, &value).map_err(bad)?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn endpoints(config: &zenoh::Config) -> serde_json::Value {
+        serde_json::from_str(&config.get_json("listen/endpoints").unwrap()).unwrap()
+    }
+
+    #[test]
+    fn a_peer_listens_on_udp_unless_told_otherwise() {
+        let peer = ZenohOptions::default().config().unwrap();
+        assert_eq!(endpoints(&peer), serde_json::json!([PEER_LISTEN]));
+
+        let tcp = ZenohOptions {
+            listen: vec!["tcp/0.0.0.0:7447".into()],
+            ..Default::default()
+        };
+        assert_eq!(
+            endpoints(&tcp.config().unwrap()),
+            serde_json::json!(["tcp/0.0.0.0:7447"])
+        );
+
+        // A router keeps Zenoh's own default (TCP), for members on routed networks.
+        let router = ZenohOptions {
+            mode: Mode::Router,
+            ..Default::default()
+        };
+        assert!(
+            !endpoints(&router.config().unwrap())
+                .to_string()
+                .contains("udp")
+        );
+    }
+
+    #[test]
+    fn a_file_that_lists_endpoints_keeps_them() {
+        let dir = std::env::temp_dir().join(format!("seacover-zenoh-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("zenoh.json5");
+        std::fs::write(&file, r#"{ listen: { endpoints: ["tcp/127.0.0.1:0"] } }"#).unwrap();
+        let options = ZenohOptions {
+            config: Some(file),
+            ..Default::default()
+        };
+        let config = options.config().unwrap();
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert_eq!(endpoints(&config), serde_json::json!(["tcp/127.0.0.1:0"]));
+    }
 }
