@@ -23,6 +23,7 @@ mod geodesy;
 mod http_edge;
 mod load;
 mod network;
+mod peer_coordinator;
 mod peer_fleet;
 mod peer_medium;
 mod peer_trust;

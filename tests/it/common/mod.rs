@@ -13,6 +13,8 @@ pub mod geo;
 pub mod inprocess;
 pub mod link;
 pub mod netns;
+pub mod fleet;
+pub mod paper;
 pub mod peer;
 pub mod process;
 pub mod server;
