@@ -12,9 +12,10 @@
 //! heard every other vessel's beacon 0.1 s ago (all fresh).
 //!
 //! Per N, the node's tick and its parts:
-//! - `tick`: [`Table::neighbours`] over the N − 1 beacons heard, then
-//!   [`step`] with them: what the node does every control tick;
-//! - `table`: [`Table::neighbours`] alone (O(N): it copies every beacon);
+//! - `tick`: [`Table::neighbours_near`] over the N − 1 beacons heard (only
+//!   those that can matter are copied out), then [`step`] with them: what
+//!   the node does every control tick;
+//! - `table`: [`Table::neighbours_near`] alone (one pass over the table);
 //! - `step`: [`step`] alone, with the N − 1 neighbours;
 //! - `step-in-reach`: [`step`] with only the neighbours within r_i + r_j
 //!   (the only ones that can change its cell or its safety filter: the
@@ -36,7 +37,7 @@ use std::time::{Duration, Instant};
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use rand::{RngExt, SeedableRng};
-use seacover::agent::peer::step::step;
+use seacover::agent::peer::step::{relevance, step};
 use seacover::agent::peer::table::{Ageing, Neighbour, Table};
 use seacover::agent::peer::wire;
 use seacover::control::Vec3;
@@ -214,6 +215,15 @@ fn peer(c: &mut Criterion) {
         };
         let (all, near) = (once(&node.neighbours), once(&node.in_reach));
         assert_eq!(all.command, near.command);
+        // And those the table hands out on board (what `tick` uses).
+        let on_board = node.table.neighbours_near(
+            &node.me,
+            (node.own.x, node.own.y),
+            relevance(m, node.actuator),
+            node.now,
+            &node.ageing,
+        );
+        assert_eq!(once(&on_board).command, all.command);
         assert_eq!(all.partition, node.neighbours.len());
         eprintln!(
             "peer/{n}: {:.1} m square, {} risk objects; the node hears {} vessels, \
@@ -232,7 +242,13 @@ fn peer(c: &mut Criterion) {
             b.iter(|| {
                 t += 0.1;
                 tick += 1;
-                let neighbours = node.table.neighbours(&node.me, node.now, &node.ageing);
+                let neighbours = node.table.neighbours_near(
+                    &node.me,
+                    (node.own.x, node.own.y),
+                    relevance(&node.mission, node.actuator),
+                    node.now,
+                    &node.ageing,
+                );
                 black_box(step(
                     &node.mission,
                     &node.own,
@@ -246,7 +262,15 @@ fn peer(c: &mut Criterion) {
             })
         });
         group.bench_function(BenchmarkId::new("table", n), |b| {
-            b.iter(|| black_box(node.table.neighbours(&node.me, node.now, &node.ageing)))
+            b.iter(|| {
+                black_box(node.table.neighbours_near(
+                    &node.me,
+                    (node.own.x, node.own.y),
+                    relevance(&node.mission, node.actuator),
+                    node.now,
+                    &node.ageing,
+                ))
+            })
         });
         for (name, neighbours) in [
             ("step", &node.neighbours),

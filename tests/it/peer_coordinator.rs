@@ -161,7 +161,13 @@ fn b_coordinator_lost_and_restarted() {
     let rev_before = revisions(&fleet).values().copied().max().unwrap_or(0);
     let object = json!({"x": 75.0, "y": 25.0, "alpha": 40.0, "sigma": 12.0});
     let posted = now();
-    let (status, created) = rest(&fleet, &python, "POST", "/api/v1/risk-objects", Some(&object));
+    let (status, created) = rest(
+        &fleet,
+        &python,
+        "POST",
+        "/api/v1/risk-objects",
+        Some(&object),
+    );
     checks.check(
         status == 201,
         format!("POST /api/v1/risk-objects answers 201 (got {status}: {created})"),
@@ -211,7 +217,12 @@ fn b_coordinator_lost_and_restarted() {
              second, last lines:\n{}",
             first_log.lines().count(),
             shore_log.lines().count(),
-            shore_log.lines().rev().take(5).collect::<Vec<_>>().join("\n")
+            shore_log
+                .lines()
+                .rev()
+                .take(5)
+                .collect::<Vec<_>>()
+                .join("\n")
         );
     }
     eprintln!(
@@ -252,7 +263,10 @@ fn b_coordinator_lost_and_restarted() {
         slowest <= 1.0,
         format!("the risk object reaches every vessel within 1 s (slowest {slowest:.3} s)"),
     );
-    checks.check(objects >= 1, format!("the mission holds the new object ({objects})"));
+    checks.check(
+        objects >= 1,
+        format!("the mission holds the new object ({objects})"),
+    );
     checks.check(
         e_new_max < 0.5,
         format!("re-converged in the new mission: E_max {e_new_max:.3} m < 0.5 m"),

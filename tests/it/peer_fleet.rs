@@ -38,7 +38,6 @@
 //! Needs root (skipped with a message otherwise, a failure under CI=true)
 //! and the test venv's Python with eclipse-zenoh and cbor2.
 
-
 use std::collections::{BTreeMap, BTreeSet};
 use std::thread::sleep;
 use std::time::{Duration, Instant};

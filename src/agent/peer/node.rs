@@ -441,8 +441,10 @@ impl Declared {
             self.controlled = false;
             return None;
         };
-        let neighbours = shared.table.lock().expect("table lock").neighbours(
+        let neighbours = shared.table.lock().expect("table lock").neighbours_near(
             &self.id,
+            (own.x, own.y),
+            super::step::relevance(&rev.mission, actuator),
             Instant::now(),
             &shared.config.ageing,
         );

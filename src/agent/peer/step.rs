@@ -16,11 +16,12 @@ use crate::control::Vec3;
 use crate::control::barrier::{Margin, Scratch};
 use crate::control::guidance::Guidance;
 use crate::control::model::State;
-use crate::coverage::range::local_cell;
+use crate::coverage::range::{interaction_distance, local_cell, reach};
 use crate::coverage::{CellResult, Options, Vessel};
 use crate::geometry::Point;
 use crate::mission::Mission;
 use crate::protocol::CommandDocument;
+use crate::protocol::peer::BeaconDocument;
 
 /// What the loop computed: the command for the hull, and the cell.
 #[derive(Debug, Clone)]
@@ -39,6 +40,41 @@ fn state_of(n: &Neighbour) -> State {
         y: b.y,
         psi: b.psi,
         vel: Vec3::new(b.u, b.v, b.r),
+    }
+}
+
+/// How far from a vessel of `actuator` (k, β as the wire carries them) a
+/// neighbour's beacon can still matter [m]: its cell (the interaction
+/// distance of [`coverage::range`](crate::coverage::range); 2r for the same
+/// actuator) or its safety filter (the safety distance plus the barrier's
+/// horizon for two hulls closing at the mission's top speed), whichever
+/// is farther. A neighbour farther than that (plus how far it may have
+/// gone since its beacon) changes neither; the table leaves it out
+/// ([`Table::neighbours_near`](super::table::Table::neighbours_near)).
+pub fn relevance(mission: &Mission, actuator: (f64, f64)) -> impl Fn(&BeaconDocument) -> f64 {
+    let (k, beta) = actuator;
+    let origin = Point { x: 0.0, y: 0.0 };
+    let own = Vessel {
+        position: origin,
+        k,
+        beta,
+    };
+    let same = 2.0 * reach(beta);
+    let barrier = mission.safety.barrier();
+    let g = &mission.guidance;
+    let safety = barrier.safety_distance + barrier.horizon(2.0 * g.max_speed, g.max_yaw_rate);
+    move |b| {
+        let cell = if b.k == k && b.beta == beta {
+            same
+        } else {
+            let other = Vessel {
+                position: origin,
+                k: b.k,
+                beta: b.beta,
+            };
+            interaction_distance(&own, &other)
+        };
+        cell.max(safety)
     }
 }
 

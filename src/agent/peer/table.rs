@@ -189,39 +189,47 @@ impl Table {
     /// Everybody but `me` not yet forgotten, in id order (forgetting the
     /// rest).
     pub fn neighbours(&mut self, me: &str, now: Instant, ageing: &Ageing) -> Vec<Neighbour> {
-        self.heard
-            .retain(|_, h| age(h, now, ageing) <= ageing.forget_after);
-        self.heard
-            .iter()
-            .filter(|(id, _)| id.as_str() != me)
-            .map(|(id, h)| {
-                let age = age(h, now, ageing);
-                let b = &h.beacon;
-                let (s, c) = b.psi.sin_cos();
-                let (vx, vy) = (b.u * c - b.v * s, b.u * s + b.v * c);
-                if age <= ageing.stale_after {
-                    let mut beacon = b.clone();
-                    beacon.x += vx * age;
-                    beacon.y += vy * age;
-                    beacon.psi += b.r * age;
-                    Neighbour {
-                        id: id.clone(),
-                        age,
-                        beacon,
-                        silent: None,
-                    }
-                } else {
-                    Neighbour {
-                        id: id.clone(),
-                        age,
-                        beacon: b.clone(),
-                        silent: Some(Silent {
-                            radius: (vx.hypot(vy) + ageing.drift) * age,
-                        }),
-                    }
-                }
-            })
-            .collect()
+        self.neighbours_near(me, (0.0, 0.0), |_| f64::INFINITY, now, ageing)
+    }
+
+    /// [`Table::neighbours`], only those that can matter to a vessel at
+    /// `centre`: a neighbour whose beacon is farther than `radius(beacon)`
+    /// plus how far it can have gone since (extrapolated, or its silent
+    /// radius) is not copied out. One pass over the table, and a
+    /// subtraction and a comparison for a neighbour left out: what a node
+    /// pays per vessel it hears, however large the fleet.
+    pub fn neighbours_near(
+        &mut self,
+        me: &str,
+        centre: (f64, f64),
+        radius: impl Fn(&BeaconDocument) -> f64,
+        now: Instant,
+        ageing: &Ageing,
+    ) -> Vec<Neighbour> {
+        let mut out = Vec::new();
+        self.heard.retain(|id, h| {
+            let age = age(h, now, ageing);
+            if age > ageing.forget_after {
+                return false;
+            }
+            if id.as_str() == me {
+                return true;
+            }
+            let b = &h.beacon;
+            let speed = b.u.hypot(b.v);
+            let moved = if age <= ageing.stale_after {
+                speed * age
+            } else {
+                (speed + ageing.drift) * age
+            };
+            let (dx, dy) = (b.x - centre.0, b.y - centre.1);
+            let reach = radius(b) + moved;
+            if dx * dx + dy * dy <= reach * reach {
+                out.push(neighbour(id, h, age, ageing));
+            }
+            true
+        });
+        out
     }
 
     /// Every vessel heard (own ones included) and its beacon's age [s of
@@ -231,6 +239,36 @@ impl Table {
             .iter()
             .map(|(id, h)| (id.clone(), age(h, now, ageing)))
             .collect()
+    }
+}
+
+/// `h` as the loop on board sees it at `age`: moved along its ground
+/// velocity while fresh, at its last position with its uncertainty radius
+/// once silent.
+fn neighbour(id: &str, h: &Heard, age: f64, ageing: &Ageing) -> Neighbour {
+    let b = &h.beacon;
+    let (s, c) = b.psi.sin_cos();
+    let (vx, vy) = (b.u * c - b.v * s, b.u * s + b.v * c);
+    if age <= ageing.stale_after {
+        let mut beacon = b.clone();
+        beacon.x += vx * age;
+        beacon.y += vy * age;
+        beacon.psi += b.r * age;
+        Neighbour {
+            id: id.to_string(),
+            age,
+            beacon,
+            silent: None,
+        }
+    } else {
+        Neighbour {
+            id: id.to_string(),
+            age,
+            beacon: b.clone(),
+            silent: Some(Silent {
+                radius: (vx.hypot(vy) + ageing.drift) * age,
+            }),
+        }
     }
 }
 
@@ -260,6 +298,41 @@ mod tests {
             rev: 0,
             controlled: true,
         })
+    }
+
+    #[test]
+    fn only_the_neighbours_that_can_matter_are_handed_out() {
+        let ageing = Ageing::default();
+        let mut table = Table::new("bay", ["me".to_string()]);
+        let t0 = Instant::now();
+        let utc = 1.8e9;
+        // Beacons at x = 0, 100, 200, 300 m, each moving east at 1 m/s.
+        for (i, x) in [0.0, 100.0, 200.0, 300.0].into_iter().enumerate() {
+            let id = format!("v{i}");
+            table.offer(
+                &format!("seacover/bay/beacon/{id}"),
+                &beacon(&id, utc, x),
+                false,
+                t0,
+                utc,
+                &ageing,
+            );
+        }
+        let ids = |n: Vec<Neighbour>| n.into_iter().map(|n| n.id).collect::<Vec<_>>();
+        let at = |secs| t0 + Duration::from_secs(secs);
+        let all = ids(table.neighbours("me", at(1), &ageing));
+        assert_eq!(all, ["v0", "v1", "v2", "v3"]);
+        // 150 m from x = 0: v0 and v1; v2's beacon (200 m, 1 s old, 1 m/s)
+        // is 200 > 150 + 1.
+        let near = ids(table.neighbours_near("me", (0.0, 0.0), |_| 150.0, at(1), &ageing));
+        assert_eq!(near, ["v0", "v1"]);
+        // Silent for 10 s its radius (1.2 m/s × 10 s = 12 m) counts too:
+        // 200 ≤ 190 + 12.
+        let near = ids(table.neighbours_near("me", (0.0, 0.0), |_| 190.0, at(10), &ageing));
+        assert_eq!(near, ["v0", "v1", "v2"]);
+        // The same as `neighbours` for the ones handed out.
+        let near = table.neighbours_near("me", (0.0, 0.0), |_| 150.0, at(2), &ageing);
+        assert_eq!(near[..], table.neighbours("me", at(2), &ageing)[..2]);
     }
 
     #[test]

@@ -678,4 +678,3 @@ pub fn check_wire(checks: &mut Checks, fleet: &Fleet) -> (usize, usize) {
     );
     (count, max_size)
 }
-

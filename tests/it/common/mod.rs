@@ -9,11 +9,11 @@
 #![allow(dead_code)]
 
 pub mod browser;
+pub mod fleet;
 pub mod geo;
 pub mod inprocess;
 pub mod link;
 pub mod netns;
-pub mod fleet;
 pub mod paper;
 pub mod peer;
 pub mod process;

@@ -274,7 +274,6 @@ impl Checks {
     }
 }
 
-
 /// The paper's scenario with the region and risk of `mission` (a mission
 /// document as `GET /api/v1/mission` gives it): the same vessels and
 /// actuators, for [`evaluate_in`].

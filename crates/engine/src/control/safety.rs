@@ -144,7 +144,8 @@ impl SafetyParams {
         Ok(())
     }
 
-    fn barrier(&self) -> Barrier {
+    /// The control barrier these parameters make.
+    pub fn barrier(&self) -> Barrier {
         Barrier {
             safety_distance: self.safety_distance,
             shore_distance: self.shore_distance,

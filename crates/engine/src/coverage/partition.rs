@@ -34,7 +34,7 @@ use geo::{Area, BooleanOps, LineString, MultiPolygon, Polygon};
 use rstar::RTree;
 use rstar::primitives::GeomWithData;
 
-use super::fleet::Fleet;
+use super::fleet::{Fleet, Vessel};
 #[cfg(test)]
 use crate::geometry::cross;
 use crate::geometry::{
@@ -129,50 +129,17 @@ pub fn power_cells_with(region: &Region, fleet: &Fleet, parallel: bool) -> Vec<C
             .map(|(i, v)| GeomWithData::new([v.position.x, v.position.y], i))
             .collect(),
     );
-    let beta = fleet.beta();
-    let ln_k: Vec<f64> = vessels.iter().map(|v| v.k.ln()).collect();
-    let ln_k_max = ln_k.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    let (rmin, rmax) = region.bounds();
-    // A margin so that Q's boundary never coincides with the starting box.
-    let margin = 1e-3 * (rmax.x - rmin.x).max(rmax.y - rmin.y) + 1.0;
-    let lo = Point {
-        x: rmin.x - margin,
-        y: rmin.y - margin,
-    };
-    let hi = Point {
-        x: rmax.x + margin,
-        y: rmax.y + margin,
-    };
-
+    let setup = Setup::new(region, fleet);
     // A first radius that holds every neighbour a typical cell needs (its
     // farthest vertex is ~0.6 mean spacings away, so neighbours beyond ~1.2
     // spacings cannot cut it); the best-first iterator, which costs a heap
     // operation per neighbour, is only needed when that is not enough.
+    let (lo, hi) = (setup.lo, setup.hi);
     let spacing = ((hi.x - lo.x) * (hi.y - lo.y) / vessels.len() as f64).sqrt();
     let first_radius = 2.5 * spacing;
     let cell_of = |i: usize, near: &mut Vec<(f64, usize)>| -> CellGeometry {
         let p = vessels[i].position;
-        let mut cell = ConvexPolygon::rectangle(lo - p, hi - p);
-        let w_i = (ln_k_max - ln_k[i]) / (2.0 * beta);
-        // Clips by vessel j; false once the cell is empty.
-        let cut = |cell: &mut ConvexPolygon, j: usize| -> bool {
-            let d = vessels[j].position - p;
-            let d2 = norm2(d);
-            if d2 == 0.0 {
-                if ln_k[j] > ln_k[i] || (ln_k[j] == ln_k[i] && j < i) {
-                    cell.vertices.clear();
-                }
-            } else {
-                cell.clip(d, 0.5 * d2 - (ln_k[j] - ln_k[i]) / (2.0 * beta));
-            }
-            !cell.is_empty()
-        };
-        // Whether no vessel at distance ≥ `dist` can cut the cell any more.
-        let settled = |cell: &ConvexPolygon, dist: f64| {
-            let r2 = cell.max_distance2(Point { x: 0.0, y: 0.0 });
-            dist >= r2.sqrt() + (r2 + 2.0 * w_i).sqrt()
-        };
-
+        let mut clipper = setup.clipper(i);
         near.clear();
         near.extend(
             tree.locate_within_distance([p.x, p.y], first_radius * first_radius)
@@ -182,36 +149,150 @@ pub fn power_cells_with(region: &Region, fleet: &Fleet, parallel: bool) -> Vec<C
         near.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         let mut alive = true;
         for &(d2, j) in near.iter() {
-            if settled(&cell, d2.sqrt()) {
+            if clipper.settled(d2.sqrt()) {
                 break;
             }
-            alive = cut(&mut cell, j);
+            alive = clipper.cut(j);
             if !alive {
                 break;
             }
         }
-        if alive && !settled(&cell, first_radius) {
+        if alive && !clipper.settled(first_radius) {
             for (nb, d2) in tree.nearest_neighbor_iter_with_distance_2(&[p.x, p.y]) {
                 let j = nb.data;
                 if j == i || d2 <= first_radius * first_radius {
                     continue; // itself, or already applied
                 }
-                if settled(&cell, d2.sqrt()) || !cut(&mut cell, j) {
+                if clipper.settled(d2.sqrt()) || !clipper.cut(j) {
                     break;
                 }
             }
         }
-        if cell.is_empty() {
-            return CellGeometry::Empty;
-        }
-        cell.translate(p);
-        clip_to_region(cell, region)
+        clipper.finish(region)
     };
     super::map_indexed(
         vessels.len(),
         parallel && vessels.len() >= super::PARALLEL_MIN,
         cell_of,
     )
+}
+
+/// Vessel `i`'s cell alone: the same cell as `power_cells(region,
+/// fleet)[i]`, clipped by the same vessels in the same order (nearest
+/// first, ties by index) up to the same security radius, without the
+/// others' cells or a spatial index. For one vessel of a peer fleet,
+/// which needs only its own cell among the ~140 vessels within its reach
+/// (`coverage::range`): one sort of the given vessels by distance.
+pub fn power_cell(region: &Region, fleet: &Fleet, i: usize) -> CellGeometry {
+    let vessels = fleet.vessels();
+    let setup = Setup::new(region, fleet);
+    let p = vessels[i].position;
+    let mut order: Vec<(f64, usize)> = vessels
+        .iter()
+        .enumerate()
+        .filter(|&(j, _)| j != i)
+        .map(|(j, v)| (norm2(v.position - p), j))
+        .collect();
+    order.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let mut clipper = setup.clipper(i);
+    for (d2, j) in order {
+        if clipper.settled(d2.sqrt()) || !clipper.cut(j) {
+            break;
+        }
+    }
+    clipper.finish(region)
+}
+
+/// What every cell of one partition shares: the vessels, their ln k, β,
+/// and the starting box (Q's bounding box with a margin, so that Q's
+/// boundary never coincides with it).
+struct Setup<'a> {
+    vessels: &'a [Vessel],
+    ln_k: Vec<f64>,
+    ln_k_max: f64,
+    beta: f64,
+    lo: Point,
+    hi: Point,
+}
+
+impl<'a> Setup<'a> {
+    fn new(region: &Region, fleet: &'a Fleet) -> Setup<'a> {
+        let vessels = fleet.vessels();
+        let ln_k: Vec<f64> = vessels.iter().map(|v| v.k.ln()).collect();
+        let ln_k_max = ln_k.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let (rmin, rmax) = region.bounds();
+        let margin = 1e-3 * (rmax.x - rmin.x).max(rmax.y - rmin.y) + 1.0;
+        Setup {
+            vessels,
+            ln_k,
+            ln_k_max,
+            beta: fleet.beta(),
+            lo: Point {
+                x: rmin.x - margin,
+                y: rmin.y - margin,
+            },
+            hi: Point {
+                x: rmax.x + margin,
+                y: rmax.y + margin,
+            },
+        }
+    }
+
+    /// Vessel `i`'s cell before any clipping, in coordinates centred on it.
+    fn clipper(&self, i: usize) -> Clipper<'_, 'a> {
+        let p = self.vessels[i].position;
+        Clipper {
+            setup: self,
+            i,
+            p,
+            w_i: (self.ln_k_max - self.ln_k[i]) / (2.0 * self.beta),
+            cell: ConvexPolygon::rectangle(self.lo - p, self.hi - p),
+        }
+    }
+}
+
+/// One cell being clipped (coordinates centred on its vessel).
+struct Clipper<'s, 'a> {
+    setup: &'s Setup<'a>,
+    i: usize,
+    p: Point,
+    /// W_i of the module doc.
+    w_i: f64,
+    cell: ConvexPolygon,
+}
+
+impl Clipper<'_, '_> {
+    /// Clips by vessel j; false once the cell is empty.
+    fn cut(&mut self, j: usize) -> bool {
+        let s = self.setup;
+        let (i, ln_k) = (self.i, &s.ln_k);
+        let d = s.vessels[j].position - self.p;
+        let d2 = norm2(d);
+        if d2 == 0.0 {
+            if ln_k[j] > ln_k[i] || (ln_k[j] == ln_k[i] && j < i) {
+                self.cell.vertices.clear();
+            }
+        } else {
+            self.cell
+                .clip(d, 0.5 * d2 - (ln_k[j] - ln_k[i]) / (2.0 * s.beta));
+        }
+        !self.cell.is_empty()
+    }
+
+    /// Whether no vessel at distance ≥ `dist` can cut the cell any more.
+    fn settled(&self, dist: f64) -> bool {
+        let r2 = self.cell.max_distance2(Point { x: 0.0, y: 0.0 });
+        dist >= r2.sqrt() + (r2 + 2.0 * self.w_i).sqrt()
+    }
+
+    /// The cell in world coordinates, intersected with Q.
+    fn finish(mut self, region: &Region) -> CellGeometry {
+        if self.cell.is_empty() {
+            return CellGeometry::Empty;
+        }
+        self.cell.translate(self.p);
+        clip_to_region(self.cell, region)
+    }
 }
 
 /// Intersects a convex cell (world coordinates) with Q.
@@ -299,6 +380,29 @@ mod tests {
             vec![],
         )
         .unwrap()
+    }
+
+    #[test]
+    fn one_cell_alone_is_that_cell_of_the_partition_bit_for_bit() {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let region = square(300.0);
+        let vessels: Vec<Vessel> = (0..150)
+            .map(|i| Vessel {
+                position: Point {
+                    x: rng.random_range(-20.0..320.0),
+                    y: rng.random_range(-20.0..320.0),
+                },
+                // Two gains: power weights, not only bisectors.
+                k: if i % 3 == 0 { 0.8 } else { 0.5 },
+                beta: 0.001,
+            })
+            .collect();
+        let fleet = Fleet::new(vessels).unwrap();
+        let all = power_cells(&region, &fleet);
+        for (i, cell) in all.iter().enumerate() {
+            assert_eq!(&power_cell(&region, &fleet, i), cell, "vessel {i}");
+        }
     }
 
     #[test]

@@ -26,16 +26,16 @@
 //!
 //! ## Cost
 //! Selecting neighbours is one distance test per vessel heard; the cell
-//! is then the partition of every relevant vessel (~140 at the paper's
-//! density), of which one cell is kept: the cost is bounded by the
-//! density, not the fleet, but partitioning only the ~15 neighbours that
-//! bound the cell would give it ~24× faster (`cargo bench --bench peer`,
+//! is then [`power_cell`]: the relevant vessels (~140 at the paper's
+//! density) sorted by distance, the own cell clipped by the nearest until
+//! no farther one can cut it (~15), and its integrals. Bounded by the
+//! density, not the fleet (`cargo bench --bench peer`,
 //! docs/performance.md).
 
 use super::density::RiskField;
 use super::evaluate::{CellResult, Options, cell_figures};
 use super::fleet::{Fleet, Vessel};
-use super::partition::power_cells_with;
+use super::partition::power_cell;
 use crate::geometry::{Region, norm2};
 
 /// ε: the share of its peak below which an actuator's performance counts
@@ -79,8 +79,7 @@ pub fn local_cell(
     let mut vessels = vec![own];
     vessels.extend(others.into_iter().filter(|o| relevant(&own, o)));
     let fleet = Fleet::new(vessels).ok()?;
-    let mut geometries = power_cells_with(region, &fleet, false);
-    let geometry = geometries.swap_remove(0);
+    let geometry = power_cell(region, &fleet, 0);
     let mut near = Vec::new();
     Some(cell_figures(
         region,
