@@ -48,7 +48,6 @@ use seacover::coverage::range::{local_cell, relevant};
 use seacover::coverage::{CellGeometry, Options, Vessel};
 use seacover::geometry::{Point, norm2};
 use seacover::mission::Mission;
-use seacover::protocol::peer::BeaconDocument;
 use seacover::protocol::{RegionDocument, RiskDocument, RiskObjectDocument};
 
 /// The paper's density: 8 vessels on 100 m × 100 m.
@@ -137,21 +136,17 @@ fn node(n: usize, seed: u64) -> Node {
     let t0 = Instant::now();
     let utc = 1.8e9;
     for (i, s) in states.iter().enumerate() {
-        let beacon = BeaconDocument {
-            id: id(i),
-            seq: 1,
-            t: utc,
-            x: s.x,
-            y: s.y,
-            psi: s.psi,
-            u: s.vel.x,
-            v: s.vel.y,
-            r: s.vel.z,
-            k: actuator.0,
-            beta: actuator.1,
-            rev: 0,
-            controlled: true,
-        };
+        let beacon = wire::beacon_of(
+            s,
+            wire::Said {
+                id: &id(i),
+                seq: 1,
+                t: utc,
+                actuator,
+                rev: 0,
+                controlled: true,
+            },
+        );
         let bytes = wire::encode(&beacon);
         table.offer(
             &keys.beacon(&beacon.id),

@@ -25,6 +25,10 @@ use crate::common::process::KillOnDrop;
 
 const SEACOVER: &str = env!("CARGO_BIN_EXE_seacover");
 const FLEET: &str = "trust";
+/// How each bad input is sent: ten at 5 Hz, after the injector's first
+/// subscriber. The injector links to each vessel in turn (its first
+/// subscriber is enough for it to start), and every vessel must get some.
+const TEN_AT_5_HZ: [&str; 6] = ["--count", "10", "--hz", "5", "--wait-subscriber", "10"];
 const PAPER: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/paper.json");
 
 /// Vessel `usv-<i+1>` in host `i`, with the credentials.
@@ -231,19 +235,8 @@ fn without_credentials_nothing_is_heard_and_with_them_bad_input_changes_nothing(
         ),
     ];
     for (reason, args) in &bad_beacons {
-        // Ten at 5 Hz: the injector links to each vessel in turn (its
-        // first subscriber is enough for it to start), and every vessel
-        // must get some.
-        let mut all: Vec<&str> = vec![
-            "--fleet",
-            FLEET,
-            "--count",
-            "10",
-            "--hz",
-            "5",
-            "--wait-subscriber",
-            "10",
-        ];
+        let mut all: Vec<&str> = vec!["--fleet", FLEET];
+        all.extend(TEN_AT_5_HZ);
         all.extend(c);
         all.extend(args.iter().map(String::as_str));
         inject(&medium, &python, 4, &all);
@@ -259,13 +252,8 @@ fn without_credentials_nothing_is_heard_and_with_them_bad_input_changes_nothing(
         &other,
         "--stamp",
         "--canonical",
-        "--count",
-        "10",
-        "--hz",
-        "5",
-        "--wait-subscriber",
-        "10",
     ];
+    all.extend(TEN_AT_5_HZ);
     all.extend(c);
     inject(&medium, &python, 4, &all);
     // A mission revision that fails validation.
@@ -286,13 +274,8 @@ fn without_credentials_nothing_is_heard_and_with_them_bad_input_changes_nothing(
         FLEET,
         "--mission-json",
         bad_mission.to_str().unwrap(),
-        "--count",
-        "10",
-        "--hz",
-        "5",
-        "--wait-subscriber",
-        "10",
     ];
+    all.extend(TEN_AT_5_HZ);
     all.extend(c);
     inject(&medium, &python, 4, &all);
 

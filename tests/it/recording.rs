@@ -21,30 +21,11 @@ const BIN: &str = env!("CARGO_BIN_EXE_seacover");
 /// The interpreter with `mcap` and `jsonschema`; `None` (the test is
 /// skipped with a message) without one, except under CI=true.
 fn python() -> Option<PathBuf> {
-    let candidates = [
-        std::env::var_os("SEACOVER_PYTHON").map(PathBuf::from),
-        Some(PathBuf::from(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/target/test-venv/bin/python"
-        ))),
-    ];
-    for p in candidates.into_iter().flatten() {
-        let ok = Command::new(&p)
-            .args(["-c", "import mcap, jsonschema"])
-            .status()
-            .is_ok_and(|s| s.success());
-        if ok {
-            return Some(p);
-        }
-    }
-    assert!(
-        std::env::var("CI").as_deref() != Ok("true"),
-        "CI=true: Python with mcap and jsonschema is required (scripts/test makes target/test-venv)"
-    );
-    eprintln!(
-        "skipped: no Python with Foxglove's mcap package (run scripts/test, or set SEACOVER_PYTHON)"
-    );
-    None
+    crate::common::process::venv_python(
+        "recording",
+        &["mcap", "jsonschema"],
+        "Python with Foxglove's mcap package and jsonschema",
+    )
 }
 
 /// The independent reader's report of `file`.

@@ -26,7 +26,7 @@ use crate::agent::VesselConfig;
 use crate::agent::onboard::Onboard;
 use crate::control::barrier::Scratch;
 use crate::control::guidance::Guidance;
-use crate::protocol::peer::{BeaconDocument, PeerStatusDocument};
+use crate::protocol::peer::PeerStatusDocument;
 
 /// Seconds since 1970 by this machine's (disciplined) clock.
 pub fn utc_now() -> f64 {
@@ -472,22 +472,17 @@ impl Declared {
         controlled: bool,
     ) {
         self.controlled = controlled;
-        let (k, beta) = self.actuator();
-        let doc = BeaconDocument {
-            id: self.id.clone(),
-            seq: self.seq,
-            t: utc_now(),
-            x: s.x,
-            y: s.y,
-            psi: s.psi,
-            u: s.vel.x,
-            v: s.vel.y,
-            r: s.vel.z,
-            k,
-            beta,
-            rev: self.current.as_ref().map_or(0, |r| r.revision),
-            controlled,
-        };
+        let doc = wire::beacon_of(
+            s,
+            wire::Said {
+                id: &self.id,
+                seq: self.seq,
+                t: utc_now(),
+                actuator: self.actuator(),
+                rev: self.current.as_ref().map_or(0, |r| r.revision),
+                controlled,
+            },
+        );
         self.seq = self.seq.wrapping_add(1);
         let bytes = wire::encode(&doc);
         shared

@@ -13,6 +13,7 @@
 //!   [`MAX_SPEED`], an actuator the engine accepts, an id that is valid and
 //!   the key's own; anything else is a [`Refusal`], which the node counts.
 
+use crate::control::model::State;
 use crate::coverage::fleet::{MAX_BETA, MAX_K};
 use crate::protocol::peer::{BeaconDocument, PeerMissionDocument};
 
@@ -121,6 +122,39 @@ fn compact(v: f64, rel: f64, abs: f64) -> f64 {
         s
     } else {
         v
+    }
+}
+
+/// What a beacon carries beside its hull's state: who sends it, its
+/// number, its sender's time, its actuator `(k, β)`, the mission revision
+/// and whether the vessel is under control.
+pub struct Said<'a> {
+    pub id: &'a str,
+    pub seq: u8,
+    /// The sender's UTC time [s].
+    pub t: f64,
+    pub actuator: (f64, f64),
+    pub rev: u32,
+    pub controlled: bool,
+}
+
+/// The beacon of a hull in state `s`: its position, heading and
+/// body-frame velocities (u, v, r), with what `said` adds.
+pub fn beacon_of(s: &State, said: Said<'_>) -> BeaconDocument {
+    BeaconDocument {
+        id: said.id.to_string(),
+        seq: said.seq,
+        t: said.t,
+        x: s.x,
+        y: s.y,
+        psi: s.psi,
+        u: s.vel.x,
+        v: s.vel.y,
+        r: s.vel.z,
+        k: said.actuator.0,
+        beta: said.actuator.1,
+        rev: said.rev,
+        controlled: said.controlled,
     }
 }
 

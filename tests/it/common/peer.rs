@@ -19,42 +19,20 @@ use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 use serde_json::Value;
 
 use super::netns::Medium;
-use super::process::{KillOnDrop, signal};
+use super::process::{KillOnDrop, signal, venv_python};
 
 /// The observer script.
 pub const OBSERVER: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/it/peer/observer.py");
 /// The injector script.
 pub const INJECT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/it/peer/inject.py");
 
-/// The interpreter with `zenoh` and `cbor2`: `SEACOVER_PYTHON`, else
-/// target/test-venv. `None` (after "skipped: <test> needs …") without one,
-/// except under CI=true, where that panics.
+/// The interpreter with `zenoh` and `cbor2` (see [`venv_python`]).
 pub fn python_or_skip(test: &str) -> Option<PathBuf> {
-    let candidates = [
-        std::env::var_os("SEACOVER_PYTHON").map(PathBuf::from),
-        Some(PathBuf::from(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/target/test-venv/bin/python"
-        ))),
-    ];
-    for p in candidates.into_iter().flatten() {
-        let ok = Command::new(&p)
-            .args(["-c", "import zenoh, cbor2"])
-            .stderr(Stdio::null())
-            .status()
-            .is_ok_and(|s| s.success());
-        if ok {
-            return Some(p);
-        }
-    }
-    assert!(
-        std::env::var("CI").as_deref() != Ok("true"),
-        "CI=true: {test} needs Python with eclipse-zenoh and cbor2 (scripts/test makes target/test-venv)"
-    );
-    eprintln!(
-        "skipped: {test} needs Python with eclipse-zenoh and cbor2 (run scripts/test, or set SEACOVER_PYTHON)"
-    );
-    None
+    venv_python(
+        test,
+        &["zenoh", "cbor2"],
+        "Python with eclipse-zenoh and cbor2",
+    )
 }
 
 /// The UTC time in seconds, as the tools write it.

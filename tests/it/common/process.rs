@@ -1,7 +1,8 @@
-//! Child processes of the tests: POSIX signals sent with `kill`, and a child
-//! killed and reaped when its guard is dropped.
+//! Child processes of the tests: POSIX signals sent with `kill`, a child
+//! killed and reaped when its guard is dropped, and the test venv's Python.
 
-use std::process::{Child, Command};
+use std::path::PathBuf;
+use std::process::{Child, Command, Stdio};
 
 /// Sends `sig` (as `kill` takes it: `-TERM`, `-KILL`, `-STOP`, …) to `pid`
 /// and asserts that `kill` succeeded.
@@ -21,4 +22,35 @@ impl Drop for KillOnDrop {
         let _ = self.0.kill();
         let _ = self.0.wait();
     }
+}
+
+/// The test venv's interpreter, `SEACOVER_PYTHON` or else target/test-venv,
+/// if it imports every one of `modules`. `None` (after "skipped: <test>
+/// needs <what>") without one, except under CI=true, where that panics:
+/// scripts/test makes the venv.
+pub fn venv_python(test: &str, modules: &[&str], what: &str) -> Option<PathBuf> {
+    let candidates = [
+        std::env::var_os("SEACOVER_PYTHON").map(PathBuf::from),
+        Some(PathBuf::from(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/target/test-venv/bin/python"
+        ))),
+    ];
+    let import = format!("import {}", modules.join(", "));
+    for p in candidates.into_iter().flatten() {
+        let ok = Command::new(&p)
+            .args(["-c", &import])
+            .stderr(Stdio::null())
+            .status()
+            .is_ok_and(|s| s.success());
+        if ok {
+            return Some(p);
+        }
+    }
+    assert!(
+        std::env::var("CI").as_deref() != Ok("true"),
+        "CI=true: {test} needs {what} (scripts/test makes target/test-venv)"
+    );
+    eprintln!("skipped: {test} needs {what} (run scripts/test, or set SEACOVER_PYTHON)");
+    None
 }
