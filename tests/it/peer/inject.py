@@ -33,6 +33,8 @@ import time
 import cbor2
 import zenoh
 
+from peer_session import add_session_args, make_config
+
 
 def parse_args(argv):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -52,10 +54,7 @@ def parse_args(argv):
     p.add_argument("--alive", metavar="ID", help="declare the token seacover/<fleet>/alive/ID")
     p.add_argument("--wait-subscriber", type=float, default=0.0, metavar="S",
                    help="wait up to S seconds for a matching subscriber before the first put")
-    p.add_argument("--connect", action="append", default=[], metavar="EP")
-    p.add_argument("--listen", action="append", default=[], metavar="EP")
-    p.add_argument("--config", help="a Zenoh JSON5 configuration file")
-    p.add_argument("--no-multicast", action="store_true", help="turn multicast scouting off")
+    add_session_args(p)
     args = p.parse_args(argv)
     if args.mission_json is None and not args.key_suffix:
         p.error("--key-suffix is required with --hex and --cbor-json")
@@ -64,17 +63,6 @@ def parse_args(argv):
     if args.hz <= 0:
         p.error("--hz must be positive")
     return args
-
-
-def make_config(args):
-    config = zenoh.Config.from_file(args.config) if args.config else zenoh.Config()
-    config.insert_json5("mode", json.dumps("peer"))
-    if args.connect:
-        config.insert_json5("connect/endpoints", json.dumps(args.connect))
-    if args.listen:
-        config.insert_json5("listen/endpoints", json.dumps(args.listen))
-    config.insert_json5("scouting/multicast/enabled", json.dumps(not args.no_multicast))
-    return config
 
 
 def payloads(args):

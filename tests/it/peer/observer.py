@@ -66,37 +66,20 @@ os.environ.setdefault(
 import cbor2  # noqa: E402 (after the runtime's environment)
 import zenoh  # noqa: E402
 
+from peer_session import add_session_args, make_config  # noqa: E402
+
 
 def parse_args(argv):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--fleet", required=True, help="fleet name (key prefix seacover/<fleet>)")
     p.add_argument("--out", required=True, help="JSON-lines file to write")
-    p.add_argument("--connect", action="append", default=[], metavar="EP",
-                   help="Zenoh endpoint to connect to, e.g. tcp/10.0.0.1:7447 (repeatable)")
-    p.add_argument("--listen", action="append", default=[], metavar="EP",
-                   help="Zenoh endpoint to listen on (repeatable)")
-    p.add_argument("--config", help="a Zenoh JSON5 configuration file (e.g. credentials)")
-    p.add_argument("--no-multicast", action="store_true",
-                   help="turn multicast scouting off (it is on by default)")
+    add_session_args(p)
     p.add_argument("--duration", type=float, help="exit after this many seconds")
     p.add_argument("--query-mission-every", type=float, metavar="S",
                    help="query seacover/<fleet>/mission every S seconds")
     p.add_argument("--query-status-every", type=float, metavar="S",
                    help="query seacover/<fleet>/status/* every S seconds")
     return p.parse_args(argv)
-
-
-def make_config(args):
-    """The session's configuration: the file if given, then peer mode,
-    the endpoints and the multicast scouting switch on top of it."""
-    config = zenoh.Config.from_file(args.config) if args.config else zenoh.Config()
-    config.insert_json5("mode", json.dumps("peer"))
-    if args.connect:
-        config.insert_json5("connect/endpoints", json.dumps(args.connect))
-    if args.listen:
-        config.insert_json5("listen/endpoints", json.dumps(args.listen))
-    config.insert_json5("scouting/multicast/enabled", json.dumps(not args.no_multicast))
-    return config
 
 
 def jsonable(value):
