@@ -25,6 +25,7 @@
 pub mod board;
 pub mod credentials;
 mod error;
+mod index;
 pub mod node;
 pub mod session;
 pub mod step;

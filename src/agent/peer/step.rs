@@ -21,7 +21,6 @@ use crate::coverage::{CellResult, Options, Vessel};
 use crate::geometry::Point;
 use crate::mission::Mission;
 use crate::protocol::CommandDocument;
-use crate::protocol::peer::BeaconDocument;
 
 /// What the loop computed: the command for the hull, and the cell.
 #[derive(Debug, Clone)]
@@ -44,14 +43,14 @@ fn state_of(n: &Neighbour) -> State {
 }
 
 /// How far from a vessel of `actuator` (k, β as the wire carries them) a
-/// neighbour's beacon can still matter [m]: its cell (the interaction
+/// neighbour of actuator (k, β) can still matter [m]: its cell (the interaction
 /// distance of [`coverage::range`](crate::coverage::range); 2r for the same
 /// actuator) or its safety filter (the safety distance plus the barrier's
 /// horizon for two hulls closing at the mission's top speed), whichever
 /// is farther. A neighbour farther than that (plus how far it may have
 /// gone since its beacon) changes neither; the table leaves it out
 /// ([`Table::neighbours_near`](super::table::Table::neighbours_near)).
-pub fn relevance(mission: &Mission, actuator: (f64, f64)) -> impl Fn(&BeaconDocument) -> f64 {
+pub fn relevance(mission: &Mission, actuator: (f64, f64)) -> impl Fn(f64, f64) -> f64 {
     let (k, beta) = actuator;
     let origin = Point { x: 0.0, y: 0.0 };
     let own = Vessel {
@@ -63,14 +62,14 @@ pub fn relevance(mission: &Mission, actuator: (f64, f64)) -> impl Fn(&BeaconDocu
     let barrier = mission.safety.barrier();
     let g = &mission.guidance;
     let safety = barrier.safety_distance + barrier.horizon(2.0 * g.max_speed, g.max_yaw_rate);
-    move |b| {
-        let cell = if b.k == k && b.beta == beta {
+    move |other_k, other_beta| {
+        let cell = if other_k == k && other_beta == beta {
             same
         } else {
             let other = Vessel {
                 position: origin,
-                k: b.k,
-                beta: b.beta,
+                k: other_k,
+                beta: other_beta,
             };
             interaction_distance(&own, &other)
         };

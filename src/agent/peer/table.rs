@@ -22,6 +22,14 @@
 //!   half of any gap;
 //! - forgotten after that.
 //!
+//! ## What a tick costs
+//! The table is indexed by place and by arrival ([`super::index`]): a
+//! tick looks at the beacons filed near the vessel (within the widest
+//! reach of an actuator heard, plus how far a fresh beacon can have been
+//! extrapolated) and at the prefix of the arrival order that can be silent
+//! or forgotten, so its cost follows the density and the silences, not
+//! the size of the fleet.
+//!
 //! ## Refusals
 //! Undecodable, oversized and out-of-range beacons, another fleet's
 //! beacons, and a second node claiming an id (a beacon whose id is one of
@@ -32,6 +40,7 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::time::Instant;
 
+use super::index::{Index, Key};
 use super::wire::{self, Refusal};
 use crate::protocol::peer::BeaconDocument;
 
@@ -65,15 +74,24 @@ impl Default for Ageing {
 
 #[derive(Debug, Clone)]
 struct Heard {
+    /// Its newest beacon; `beacon.id` is its id.
     beacon: BeaconDocument,
     arrived: Instant,
     transit: f64,
+    /// Where [`Index`] filed it.
+    key: Key,
+}
+
+/// An actuator as the wire carries it, as a map key: (k, β) bits.
+type Actuator = (u64, u64);
+
+fn actuator_of(b: &BeaconDocument) -> Actuator {
+    (b.k.to_bits(), b.beta.to_bits())
 }
 
 /// A neighbour as the loop on board uses it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Neighbour {
-    pub id: String,
     /// Age of its newest beacon [s of mission time].
     pub age: f64,
     /// Its beacon, position moved along its ground velocity by `age` when
@@ -97,7 +115,15 @@ pub struct Table {
     fleet: String,
     /// This process's own vessels: nobody else may use their ids.
     own: BTreeSet<String>,
-    heard: BTreeMap<String, Heard>,
+    /// The slot of every vessel heard, in id order.
+    ids: BTreeMap<String, usize>,
+    /// Every vessel's newest beacon; `None` for a free slot.
+    slots: Vec<Option<Heard>>,
+    free: Vec<usize>,
+    index: Index,
+    /// How many vessels heard have each actuator (a query's reach is the
+    /// widest of theirs).
+    actuators: BTreeMap<Actuator, usize>,
     refused: BTreeMap<Refusal, u64>,
     received: u64,
 }
@@ -133,7 +159,17 @@ impl Table {
 
     /// The highest mission revision a vessel heard now works on.
     pub fn newest_revision(&self) -> Option<u32> {
-        self.heard.values().map(|h| h.beacon.rev).max()
+        self.heard().map(|h| h.beacon.rev).max()
+    }
+
+    fn heard(&self) -> impl Iterator<Item = &Heard> {
+        self.slots.iter().flatten()
+    }
+
+    fn slot(&self, slot: usize) -> &Heard {
+        self.slots[slot]
+            .as_ref()
+            .expect("an indexed slot holds a beacon")
     }
 
     /// Takes one sample from the beacon key `key`, received at `now` (and
@@ -162,7 +198,8 @@ impl Table {
         if self.own.contains(&beacon.id) && !local {
             return self.refuse(Refusal::IdConflict);
         }
-        if let Some(prev) = self.heard.get(&beacon.id) {
+        let known = self.ids.get(&beacon.id).copied();
+        if let Some(prev) = known.map(|slot| self.slot(slot)) {
             let fresh = age(prev, now, ageing) <= ageing.stale_after;
             let dt = beacon.t - prev.beacon.t;
             if fresh && dt <= 0.0 {
@@ -176,44 +213,87 @@ impl Table {
             }
         }
         let transit = (now_utc - beacon.t).clamp(0.0, MAX_TRANSIT);
-        self.heard.insert(
-            beacon.id.clone(),
-            Heard {
-                beacon,
-                arrived: now,
-                transit,
-            },
-        );
+        *self.actuators.entry(actuator_of(&beacon)).or_default() += 1;
+        let (slot, old) = match known {
+            Some(slot) => {
+                let prev = self.slots[slot].take().expect("a known id has a slot");
+                self.drop_actuator(&prev.beacon);
+                (slot, Some(prev.key))
+            }
+            None => {
+                let slot = self.free.pop().unwrap_or_else(|| {
+                    self.slots.push(None);
+                    self.slots.len() - 1
+                });
+                self.ids.insert(beacon.id.clone(), slot);
+                (slot, None)
+            }
+        };
+        let key = self.index.place(slot, old, (beacon.x, beacon.y), now);
+        self.slots[slot] = Some(Heard {
+            beacon,
+            arrived: now,
+            transit,
+            key,
+        });
+    }
+
+    fn drop_actuator(&mut self, b: &BeaconDocument) {
+        let a = actuator_of(b);
+        if let Some(n) = self.actuators.get_mut(&a) {
+            *n -= 1;
+            if *n == 0 {
+                self.actuators.remove(&a);
+            }
+        }
+    }
+
+    /// Forgets every vessel silent longer than `forget_after`: a prefix of
+    /// the arrival order.
+    fn forget(&mut self, now: Instant, ageing: &Ageing) {
+        let gone: Vec<usize> = self
+            .index
+            .oldest()
+            .take_while(|&(arrived, _)| may_be_older(arrived, now, ageing, ageing.forget_after))
+            .map(|(_, slot)| slot)
+            .filter(|&slot| age(self.slot(slot), now, ageing) > ageing.forget_after)
+            .collect();
+        for slot in gone {
+            let h = self.slots[slot]
+                .take()
+                .expect("an indexed slot holds a beacon");
+            self.ids.remove(&h.beacon.id);
+            self.index.remove(slot, h.key);
+            self.drop_actuator(&h.beacon);
+            self.free.push(slot);
+        }
     }
 
     /// Everybody but `me` not yet forgotten, in id order (forgetting the
     /// rest).
     pub fn neighbours(&mut self, me: &str, now: Instant, ageing: &Ageing) -> Vec<Neighbour> {
-        self.neighbours_near(me, (0.0, 0.0), |_| f64::INFINITY, now, ageing)
+        self.neighbours_near(me, (0.0, 0.0), |_, _| f64::INFINITY, now, ageing)
     }
 
     /// [`Table::neighbours`], only those that can matter to a vessel at
-    /// `centre`: a neighbour whose beacon is farther than `radius(beacon)`
-    /// plus how far it can have gone since (extrapolated, or its silent
-    /// radius) is not copied out. One pass over the table, and a
-    /// subtraction and a comparison for a neighbour left out: what a node
-    /// pays per vessel it hears, however large the fleet.
+    /// `centre`: a neighbour whose beacon is farther than `radius(k, β)`
+    /// (of its actuator) plus how far it can have gone since (extrapolated,
+    /// or its silent radius) is not copied out. The fresh ones are looked
+    /// for near `centre` only, the silent ones in the oldest arrivals only
+    /// (see the module doc): what a node pays follows the density.
     pub fn neighbours_near(
         &mut self,
         me: &str,
         centre: (f64, f64),
-        radius: impl Fn(&BeaconDocument) -> f64,
+        radius: impl Fn(f64, f64) -> f64,
         now: Instant,
         ageing: &Ageing,
     ) -> Vec<Neighbour> {
+        self.forget(now, ageing);
         let mut out = Vec::new();
-        self.heard.retain(|id, h| {
-            let age = age(h, now, ageing);
-            if age > ageing.forget_after {
-                return false;
-            }
-            if id.as_str() == me {
-                return true;
+        let mut consider = |h: &Heard, age: f64| {
+            if h.beacon.id == me {
+                return;
             }
             let b = &h.beacon;
             let speed = b.u.hypot(b.v);
@@ -223,21 +303,49 @@ impl Table {
                 (speed + ageing.drift) * age
             };
             let (dx, dy) = (b.x - centre.0, b.y - centre.1);
-            let reach = radius(b) + moved;
+            let reach = radius(b.k, b.beta) + moved;
             if dx * dx + dy * dy <= reach * reach {
-                out.push(neighbour(id, h, age, ageing));
+                out.push(neighbour(h, age, ageing));
             }
-            true
-        });
+        };
+        for (arrived, slot) in self.index.oldest() {
+            if !may_be_older(arrived, now, ageing, ageing.stale_after) {
+                break;
+            }
+            let h = self.slot(slot);
+            let age = age(h, now, ageing);
+            if age > ageing.stale_after {
+                consider(h, age);
+            }
+        }
+        // A fresh beacon counts from at most its actuator's radius plus
+        // the top speed times stale_after away.
+        let widest = self
+            .actuators
+            .keys()
+            .map(|&(k, beta)| radius(f64::from_bits(k), f64::from_bits(beta)))
+            .fold(0.0, f64::max);
+        let bound = widest + wire::MAX_SPEED * ageing.stale_after;
+        let mut fresh = |h: &Heard| {
+            let age = age(h, now, ageing);
+            if age <= ageing.stale_after {
+                consider(h, age);
+            }
+        };
+        match self.index.near(centre, bound, self.ids.len()) {
+            Some(near) => near.for_each(|slot| fresh(self.slot(slot))),
+            None => self.heard().for_each(fresh),
+        }
+        out.sort_unstable_by(|a, b| a.beacon.id.cmp(&b.beacon.id));
         out
     }
 
     /// Every vessel heard (own ones included) and its beacon's age [s of
     /// mission time].
     pub fn ages(&self, now: Instant, ageing: &Ageing) -> BTreeMap<String, f64> {
-        self.heard
+        self.ids
             .iter()
-            .map(|(id, h)| (id.clone(), age(h, now, ageing)))
+            .map(|(id, &slot)| (id.clone(), age(self.slot(slot), now, ageing)))
             .collect()
     }
 }
@@ -245,7 +353,7 @@ impl Table {
 /// `h` as the loop on board sees it at `age`: moved along its ground
 /// velocity while fresh, at its last position with its uncertainty radius
 /// once silent.
-fn neighbour(id: &str, h: &Heard, age: f64, ageing: &Ageing) -> Neighbour {
+fn neighbour(h: &Heard, age: f64, ageing: &Ageing) -> Neighbour {
     let b = &h.beacon;
     let (s, c) = b.psi.sin_cos();
     let (vx, vy) = (b.u * c - b.v * s, b.u * s + b.v * c);
@@ -255,14 +363,12 @@ fn neighbour(id: &str, h: &Heard, age: f64, ageing: &Ageing) -> Neighbour {
         beacon.y += vy * age;
         beacon.psi += b.r * age;
         Neighbour {
-            id: id.to_string(),
             age,
             beacon,
             silent: None,
         }
     } else {
         Neighbour {
-            id: id.to_string(),
             age,
             beacon: b.clone(),
             silent: Some(Silent {
@@ -270,6 +376,12 @@ fn neighbour(id: &str, h: &Heard, age: f64, ageing: &Ageing) -> Neighbour {
             }),
         }
     }
+}
+
+/// Whether a beacon that arrived at `arrived` can be older than `limit` at
+/// `now` (its transit counts for at most [`MAX_TRANSIT`]).
+fn may_be_older(arrived: Instant, now: Instant, ageing: &Ageing, limit: f64) -> bool {
+    (now.saturating_duration_since(arrived).as_secs_f64() + MAX_TRANSIT) * ageing.warp > limit
 }
 
 /// A beacon's age in mission seconds (see the module doc).
@@ -318,21 +430,119 @@ mod tests {
                 &ageing,
             );
         }
-        let ids = |n: Vec<Neighbour>| n.into_iter().map(|n| n.id).collect::<Vec<_>>();
+        let ids = |n: Vec<Neighbour>| n.into_iter().map(|n| n.beacon.id).collect::<Vec<_>>();
         let at = |secs| t0 + Duration::from_secs(secs);
         let all = ids(table.neighbours("me", at(1), &ageing));
         assert_eq!(all, ["v0", "v1", "v2", "v3"]);
         // 150 m from x = 0: v0 and v1; v2's beacon (200 m, 1 s old, 1 m/s)
         // is 200 > 150 + 1.
-        let near = ids(table.neighbours_near("me", (0.0, 0.0), |_| 150.0, at(1), &ageing));
+        let near = ids(table.neighbours_near("me", (0.0, 0.0), |_, _| 150.0, at(1), &ageing));
         assert_eq!(near, ["v0", "v1"]);
         // Silent for 10 s its radius (1.2 m/s × 10 s = 12 m) counts too:
         // 200 ≤ 190 + 12.
-        let near = ids(table.neighbours_near("me", (0.0, 0.0), |_| 190.0, at(10), &ageing));
+        let near = ids(table.neighbours_near("me", (0.0, 0.0), |_, _| 190.0, at(10), &ageing));
         assert_eq!(near, ["v0", "v1", "v2"]);
         // The same as `neighbours` for the ones handed out.
-        let near = table.neighbours_near("me", (0.0, 0.0), |_| 150.0, at(2), &ageing);
+        let near = table.neighbours_near("me", (0.0, 0.0), |_, _| 150.0, at(2), &ageing);
         assert_eq!(near[..], table.neighbours("me", at(2), &ageing)[..2]);
+    }
+
+    /// The indexes change nothing: in a large table of fresh, silent and
+    /// forgotten beacons, some re-filed after moving, the neighbours handed
+    /// out are those the module doc's rule picks from every beacon.
+    #[test]
+    fn the_indexed_query_hands_out_what_a_walk_over_every_beacon_would() {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let ageing = Ageing::default();
+        let mut table = Table::new("bay", ["me".to_string()]);
+        let t0 = Instant::now();
+        let utc = 1.8e9;
+        // id → (x, y, ground speed, seconds after t0 its beacon arrived).
+        let mut sent = BTreeMap::new();
+        let send = |table: &mut Table,
+                    sent: &mut BTreeMap<String, (f64, f64, f64, f64)>,
+                    id: String,
+                    x: f64,
+                    y: f64,
+                    speed: f64,
+                    at: f64| {
+            let doc = BeaconDocument {
+                id: id.clone(),
+                seq: 1,
+                t: utc + at,
+                x,
+                y,
+                psi: 0.3,
+                u: speed,
+                v: 0.0,
+                r: 0.0,
+                k: 0.5,
+                beta: 0.001,
+                rev: 0,
+                controlled: true,
+            };
+            let key = format!("seacover/bay/beacon/{id}");
+            let arrived = t0 + Duration::from_secs_f64(at);
+            table.offer(&key, &wire::encode(&doc), false, arrived, utc + at, &ageing);
+            sent.insert(id, (x, y, speed, at));
+        };
+        for i in 0..600 {
+            // A third heard within the last 4 s, the rest over 80 s.
+            let at = if i % 3 == 0 {
+                rng.random_range(76.0..80.0)
+            } else {
+                rng.random_range(0.0..80.0)
+            };
+            let (x, y) = (rng.random_range(0.0..2000.0), rng.random_range(0.0..2000.0));
+            send(
+                &mut table,
+                &mut sent,
+                format!("v{i:03}"),
+                x,
+                y,
+                rng.random_range(0.0..3.0),
+                at,
+            );
+        }
+        // Some move on and are heard again (filed in another square).
+        for i in (0..600).step_by(7) {
+            let id = format!("v{i:03}");
+            let (x, y, speed, at) = sent[&id];
+            let later = at.max(79.0) + 0.5;
+            let step = 3.0 * (later - at);
+            send(&mut table, &mut sent, id, x + step, y - step, speed, later);
+        }
+        let now = t0 + Duration::from_secs(80);
+        let mut handed_out = 0;
+        for centre in [(1000.0, 1000.0), (40.0, 1900.0), (-300.0, 500.0)] {
+            for radius in [50.0, 150.0, 400.0] {
+                let got: Vec<String> = table
+                    .neighbours_near("me", centre, |_, _| radius, now, &ageing)
+                    .into_iter()
+                    .map(|n| n.beacon.id)
+                    .collect();
+                let want: Vec<String> = sent
+                    .iter()
+                    .filter(|(_, v)| {
+                        let &(x, y, speed, at) = *v;
+                        let age = 80.0 - at;
+                        let moved = if age <= ageing.stale_after {
+                            speed * age
+                        } else {
+                            (speed + ageing.drift) * age
+                        };
+                        age <= ageing.forget_after
+                            && (x - centre.0).hypot(y - centre.1) <= radius + moved
+                    })
+                    .map(|(id, _)| id.clone())
+                    .collect();
+                handed_out += want.len();
+                assert_eq!(got, want, "about {centre:?} within {radius} m");
+            }
+        }
+        // Not a comparison of empty lists.
+        assert!(handed_out > 100, "{handed_out}");
     }
 
     #[test]
