@@ -12,10 +12,11 @@
 //! heard every other vessel's beacon 0.1 s ago (all fresh).
 //!
 //! Per N, the node's tick and its parts:
-//! - `tick`: [`Table::neighbours_near`] over the N − 1 beacons heard (only
-//!   those that can matter are copied out), then [`step`] with them: what
-//!   the node does every control tick;
-//! - `table`: [`Table::neighbours_near`] alone (one pass over the table);
+//! - `tick`: [`Table::neighbours_near`] among the N − 1 beacons heard (it
+//!   looks only at those filed near the node, and copies out those that
+//!   can matter), then [`step`] with them: what the node does every
+//!   control tick;
+//! - `table`: [`Table::neighbours_near`] alone;
 //! - `step`: [`step`] alone, with the N − 1 neighbours;
 //! - `step-in-reach`: [`step`] with only the neighbours within r_i + r_j
 //!   (the only ones that can change its cell or its safety filter: the
