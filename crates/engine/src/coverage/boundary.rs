@@ -52,24 +52,31 @@ pub fn polygon_integrals<R: AsRef<[Point]>>(rings: &[R], g: &Gaussian, far: bool
         let ring = ring.as_ref();
         let n = ring.len();
         for i in 0..n {
-            let a = ring[i] - m;
-            let b = ring[(i + 1) % n] - m;
-            let len = norm2(b - a).sqrt();
-            if len == 0.0 {
-                continue;
-            }
-            let e = (b - a) / len;
-            let normal = Point { x: e.y, y: -e.x };
-            let h = dot(a, normal);
-            let s0 = dot(a, e);
-            let (mass_part, line) = edge(g.a, g.log_weight, h, s0, s0 + len, far);
+            let (mass_part, line) = segment(ring[i] - m, ring[(i + 1) % n] - m, g, far);
             mass += mass_part;
-            moment = moment + normal * line;
+            moment = moment + line;
         }
     }
     let moment = moment * (-0.5 / g.a);
     // Back from the term's centre to the caller's frame.
     [mass, moment.x + m.x * mass, moment.y + m.y * mass]
+}
+
+/// The segment a → b (relative to g's centre, the region on its left):
+/// its share of the mass and of ∮ g n ds (near form: ∮ (g − e^λ) n ds),
+/// as [`polygon_integrals`] sums them; also the straight pieces of a
+/// curved cell ([`curved`](super::curved)).
+pub(super) fn segment(a: Point, b: Point, g: &Gaussian, far: bool) -> (f64, Point) {
+    let len = norm2(b - a).sqrt();
+    if len == 0.0 {
+        return (0.0, Point { x: 0.0, y: 0.0 });
+    }
+    let e = (b - a) / len;
+    let normal = Point { x: e.y, y: -e.x };
+    let h = dot(a, normal);
+    let s0 = dot(a, e);
+    let (mass, line) = edge(g.a, g.log_weight, h, s0, s0 + len, far);
+    (mass, normal * line)
 }
 
 /// One edge on the line at signed distance `h`, for s in [s0, s1]: returns

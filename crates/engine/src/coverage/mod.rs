@@ -18,7 +18,9 @@
 //! into a goal a vessel can reach among islands.
 
 pub mod boundary;
+pub mod curved;
 pub mod density;
+pub mod dominance;
 pub mod evaluate;
 pub mod fleet;
 pub mod gaussian;

@@ -13,6 +13,7 @@
 //! Points are [`geo::Coord<f64>`] throughout, so results pass to `geo` algorithms
 //! (boolean operations, triangulation) without conversion.
 
+pub mod arcs;
 pub mod convex;
 pub mod geodesy;
 pub mod grid;
