@@ -394,22 +394,29 @@ mod tests {
     use super::*;
     use std::time::Duration;
 
-    fn beacon(id: &str, t: f64, x: f64) -> Vec<u8> {
-        wire::encode(&BeaconDocument {
+    /// A beacon of the paper's actuator at (x, y), heading `psi`, at `u`
+    /// m/s.
+    fn doc(id: &str, t: f64, (x, y): (f64, f64), psi: f64, u: f64) -> BeaconDocument {
+        BeaconDocument {
             id: id.into(),
             seq: 1,
             t,
             x,
-            y: 0.0,
-            psi: 0.0,
-            u: 1.0,
+            y,
+            psi,
+            u,
             v: 0.0,
             r: 0.0,
             k: 0.5,
             beta: 0.001,
             rev: 0,
             controlled: true,
-        })
+        }
+    }
+
+    /// Heading east at 1 m/s on y = 0.
+    fn beacon(id: &str, t: f64, x: f64) -> Vec<u8> {
+        wire::encode(&doc(id, t, (x, 0.0), 0.0, 1.0))
     }
 
     #[test]
@@ -467,21 +474,7 @@ mod tests {
                     y: f64,
                     speed: f64,
                     at: f64| {
-            let doc = BeaconDocument {
-                id: id.clone(),
-                seq: 1,
-                t: utc + at,
-                x,
-                y,
-                psi: 0.3,
-                u: speed,
-                v: 0.0,
-                r: 0.0,
-                k: 0.5,
-                beta: 0.001,
-                rev: 0,
-                controlled: true,
-            };
+            let doc = doc(&id, utc + at, (x, y), 0.3, speed);
             let key = format!("seacover/bay/beacon/{id}");
             let arrived = t0 + Duration::from_secs_f64(at);
             table.offer(&key, &wire::encode(&doc), false, arrived, utc + at, &ageing);
