@@ -1,5 +1,7 @@
 //! Median time of one full evaluation (partition + integrals + H) per scenario,
-//! single-threaded, on the scenario documents kept in `examples/`.
+//! single-threaded (`evaluate/…`), and on every core as `seacover evaluate`
+//! runs it (`evaluate-parallel/…`, `Options::parallel`), on the scenario
+//! documents kept in `examples/`.
 //!
 //! `cargo bench --bench evaluate`; `scripts/bench-baseline` runs this and the
 //! NumPy baseline in one go and prints the table of docs/performance.md.
@@ -17,11 +19,11 @@ fn load(name: &str) -> Scenario {
     Scenario::from_document(&parse_document(&text).expect("parses")).expect("valid")
 }
 
-fn evaluate(c: &mut Criterion) {
-    let mut group = c.benchmark_group("evaluate");
-    for name in ["paper", "fleet-100", "fleet-1000", "fleet-10000"] {
+/// One group of full evaluations with `options`, a scenario per name.
+fn group_of(c: &mut Criterion, group: &str, names: &[&str], options: &Options) {
+    let mut group = c.benchmark_group(group);
+    for &name in names {
         let scenario = load(name);
-        let options = Options::default();
         if name == "fleet-10000" {
             group
                 .sample_size(10)
@@ -32,10 +34,35 @@ fn evaluate(c: &mut Criterion) {
                 .measurement_time(Duration::from_secs(4));
         }
         group.bench_function(name, |b| {
-            b.iter(|| black_box(scenario.evaluate(black_box(&options))))
+            b.iter(|| black_box(scenario.evaluate(black_box(options))))
         });
     }
     group.finish();
+}
+
+fn evaluate(c: &mut Criterion) {
+    // The mixed-β fleets (curved cells) beside their equal-β twins: the
+    // same vessels, half of them at β = 0.004 (issue 31: ≤ 3× the time).
+    let names = [
+        "paper",
+        "paper-mixed",
+        "fleet-100",
+        "fleet-1000",
+        "fleet-1000-mixed",
+        "fleet-10000",
+    ];
+    group_of(c, "evaluate", &names, &Options::default());
+}
+
+/// The same evaluations spread over every core (rayon's pool), as the
+/// `evaluate` command does them; the result is the same bit for bit.
+fn evaluate_parallel(c: &mut Criterion) {
+    let options = Options {
+        parallel: true,
+        ..Options::default()
+    };
+    let names = ["fleet-1000", "fleet-1000-mixed", "fleet-10000"];
+    group_of(c, "evaluate-parallel", &names, &options);
 }
 
 /// The partition alone (power cells clipped to the region), the part of an
@@ -63,6 +90,6 @@ fn partition(c: &mut Criterion) {
 criterion_group! {
     name = benches;
     config = Criterion::default().without_plots();
-    targets = evaluate, partition
+    targets = evaluate, evaluate_parallel, partition
 }
 criterion_main!(benches);

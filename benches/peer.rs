@@ -314,7 +314,9 @@ fn peer(c: &mut Criterion) {
         let far = match &full.geometry {
             CellGeometry::Convex(c) => c.max_distance2(me.position).sqrt(),
             CellGeometry::Clipped { hull, .. } => hull.max_distance2(me.position).sqrt(),
-            CellGeometry::Empty => unreachable!("an interior vessel has a cell"),
+            CellGeometry::Empty | CellGeometry::Curved { .. } => {
+                unreachable!("an interior vessel of one β has a power cell")
+            }
         };
         let bounding: Vec<Vessel> = heard
             .iter()

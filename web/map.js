@@ -267,6 +267,41 @@ export class MapView {
     ctx.closePath();
   }
 
+  /**
+   * A curved cell's exact boundary (the snapshot's `edges`: closed loops of
+   * segments and arcs, the cell on the left of each, angles in radians
+   * counter-clockwise from +x) as one path of subpaths. The view is a
+   * uniform scale with y flipped, so a world circle is a circle on screen;
+   * the flip turns a world angle θ into the canvas angle −θ, and an arc
+   * that runs counter-clockwise in the world (sweep > 0) runs towards
+   * smaller canvas angles: canvas's `anticlockwise` flag. Pieces run
+   * counter-clockwise and holes clockwise, so the path fills the cell with
+   * either fill rule.
+   */
+  edges(ctx, loops) {
+    const s = this.scale;
+    for (const loop of loops) {
+      if (!loop.length) continue;
+      const first = loop[0];
+      const start = first.kind === "arc"
+        ? [first.centre[0] + first.radius * Math.cos(first.start),
+           first.centre[1] + first.radius * Math.sin(first.start)]
+        : first.from;
+      ctx.moveTo(...this.toScreen(start[0], start[1]));
+      for (const e of loop) {
+        if (e.kind === "arc") {
+          const [cx, cy] = this.toScreen(e.centre[0], e.centre[1]);
+          // The arc begins with a line from the current point to its start:
+          // a no-op where the loop is continuous.
+          ctx.arc(cx, cy, s * e.radius, -e.start, -(e.start + e.sweep), e.sweep > 0);
+        } else {
+          ctx.lineTo(...this.toScreen(e.to[0], e.to[1]));
+        }
+      }
+      ctx.closePath();
+    }
+  }
+
   draw() {
     const ctx = this.ctx;
     ctx.setTransform(this.dpr, 0, 0, this.dpr, 0, 0);
@@ -309,10 +344,13 @@ export class MapView {
       if (!v.polygon) continue;
       const colour = colourOf(index.get(v.id));
       ctx.beginPath();
-      this.ring(ctx, v.polygon);
+      // Curved cells (vessels with different β) with their true arcs, every
+      // piece and hole; straight ones by their outline.
+      if (v.edges && v.edges.length) this.edges(ctx, v.edges);
+      else this.ring(ctx, v.polygon);
       ctx.globalAlpha = v.id === this.selectedVessel ? 0.35 : 0.16;
       ctx.fillStyle = colour;
-      ctx.fill();
+      ctx.fill("evenodd");
       ctx.globalAlpha = 0.9;
       ctx.strokeStyle = colour;
       ctx.stroke();

@@ -13,10 +13,11 @@ use crate::coverage::fleet::{DEFAULT_BETA, DEFAULT_K};
 use crate::coverage::{
     CellGeometry, Evaluation, Fleet, InputError, Options, RiskField, RiskObject, Vessel, evaluate,
 };
+use crate::geometry::arcs::Piece;
 use crate::geometry::{Point, Region};
 use crate::protocol::{
-    CellDocument, ErrorDetail, ErrorDocument, EvaluationDocument, OriginDocument, RegionDocument,
-    RiskDocument, ScenarioDocument, VesselDocument, XY,
+    CellDocument, EdgeDocument, ErrorDetail, ErrorDocument, EvaluationDocument, OriginDocument,
+    RegionDocument, RiskDocument, ScenarioDocument, VesselDocument, XY,
 };
 
 /// Why a scenario was rejected.
@@ -242,6 +243,85 @@ fn ring_doc(ring: &geo::LineString<f64>) -> Vec<XY> {
     pts
 }
 
+/// A cell's outline as the wire carries it: `polygon` (the largest
+/// piece's outer ring), `pieces` (every piece with its holes, when it is
+/// not one simple polygon) and, for a cell with an arc, `edges` (its exact
+/// boundary). Arcs in `polygon` and `pieces` are chords within
+/// [`ARC_TOLERANCE`](crate::coverage::partition::ARC_TOLERANCE) of them,
+/// every vertex on the arc.
+pub fn cell_outline(
+    region: &Region,
+    geometry: &CellGeometry,
+) -> (Option<Vec<XY>>, Vec<RegionDocument>, Vec<Vec<EdgeDocument>>) {
+    match geometry {
+        CellGeometry::Empty => (None, Vec::new(), Vec::new()),
+        CellGeometry::Convex(p) => (
+            Some(p.vertices.iter().map(|v| xy(*v)).collect()),
+            Vec::new(),
+            Vec::new(),
+        ),
+        cut @ (CellGeometry::Clipped { .. } | CellGeometry::Curved { .. }) => {
+            let mp = cut.pieces(region);
+            let largest =
+                mp.0.iter()
+                    .max_by(|a, b| a.unsigned_area().total_cmp(&b.unsigned_area()))
+                    .map(|p| ring_doc(p.exterior()));
+            let simple = mp.0.len() == 1 && mp.0[0].interiors().is_empty();
+            let pieces = if simple {
+                Vec::new()
+            } else {
+                mp.0.iter()
+                    .map(|p| RegionDocument {
+                        polygon: ring_doc(p.exterior()),
+                        holes: p.interiors().iter().map(ring_doc).collect(),
+                    })
+                    .collect()
+            };
+            let edges = match cut {
+                CellGeometry::Curved { pieces: boundary } if largest.is_some() => {
+                    edge_loops(boundary)
+                }
+                _ => Vec::new(),
+            };
+            (largest, pieces, edges)
+        }
+    }
+}
+
+fn edge_document(piece: &Piece) -> EdgeDocument {
+    match *piece {
+        Piece::Segment { from, to } => EdgeDocument::Segment {
+            from: xy(from),
+            to: xy(to),
+        },
+        Piece::Arc {
+            centre,
+            radius,
+            start,
+            sweep,
+        } => EdgeDocument::Arc {
+            centre: xy(centre),
+            radius,
+            start,
+            sweep,
+        },
+    }
+}
+
+/// A curved cell's boundary chained into closed loops, as
+/// [`CellDocument::edges`](crate::protocol::CellDocument::edges) says, when
+/// it has an arc (nothing otherwise): the loops of
+/// `geometry::outline::loops`, which also make `polygon`, so the two agree.
+pub fn edge_loops(pieces: &[Piece]) -> Vec<Vec<EdgeDocument>> {
+    if !pieces.iter().any(|p| matches!(p, Piece::Arc { .. })) {
+        return Vec::new();
+    }
+    crate::geometry::outline::loops(pieces)
+        .iter()
+        .map(|chain| chain.iter().map(edge_document).collect())
+        .collect()
+}
+
 /// The wire form of an evaluation over `region`.
 pub fn evaluation_document(
     region: &Region,
@@ -253,32 +333,7 @@ pub fn evaluation_document(
         .iter()
         .zip(ids)
         .map(|(c, id)| {
-            let (polygon, pieces) = match &c.geometry {
-                CellGeometry::Empty => (None, Vec::new()),
-                CellGeometry::Convex(p) => (
-                    Some(p.vertices.iter().map(|v| xy(*v)).collect()),
-                    Vec::new(),
-                ),
-                clipped @ CellGeometry::Clipped { .. } => {
-                    let mp = clipped.pieces(region);
-                    let largest =
-                        mp.0.iter()
-                            .max_by(|a, b| a.unsigned_area().total_cmp(&b.unsigned_area()))
-                            .map(|p| ring_doc(p.exterior()));
-                    let simple = mp.0.len() == 1 && mp.0[0].interiors().is_empty();
-                    let pieces = if simple {
-                        Vec::new()
-                    } else {
-                        mp.0.iter()
-                            .map(|p| RegionDocument {
-                                polygon: ring_doc(p.exterior()),
-                                holes: p.interiors().iter().map(ring_doc).collect(),
-                            })
-                            .collect()
-                    };
-                    (largest, pieces)
-                }
-            };
+            let (polygon, pieces, edges) = cell_outline(region, &c.geometry);
             CellDocument {
                 id: id.clone(),
                 mass: c.mass,
@@ -286,6 +341,7 @@ pub fn evaluation_document(
                 area: c.area,
                 polygon,
                 pieces,
+                edges,
                 gradient: xy(c.gradient),
             }
         })
@@ -305,4 +361,142 @@ pub fn evaluate_text(text: &str, options: &Options) -> Result<EvaluationDocument
         &scenario.ids,
         &scenario.evaluate(options),
     ))
+}
+
+/// Scenarios that tests elsewhere in the crate share.
+#[cfg(test)]
+pub(crate) mod fixtures {
+    use serde_json::json;
+
+    use super::*;
+    use crate::coverage::Options;
+
+    /// The paper's square with an island, four vessels with β = 0.001 and
+    /// four with β = 0.004 (each of those wins a disc round itself).
+    pub fn mixed_fleet() -> (Region, EvaluationDocument) {
+        let text = json!({
+            "region": {
+                "polygon": [[0, 0], [100, 0], [100, 100], [0, 100]],
+                "holes": [[[44, 44], [56, 44], [56, 56], [44, 56]]],
+            },
+            "risk": {"base": 0.1, "objects": [{"x": 25, "y": 70, "alpha": 10, "sigma": 10}]},
+            "vessels": [
+                {"id": "wide-1", "x": 20, "y": 20, "beta": 0.001},
+                {"id": "wide-2", "x": 80, "y": 20, "beta": 0.001},
+                {"id": "wide-3", "x": 80, "y": 80, "beta": 0.001},
+                {"id": "wide-4", "x": 20, "y": 80, "beta": 0.001},
+                {"id": "near-1", "x": 50, "y": 25, "beta": 0.004},
+                {"id": "near-2", "x": 75, "y": 50, "beta": 0.004},
+                {"id": "near-3", "x": 50, "y": 75, "beta": 0.004},
+                {"id": "near-4", "x": 25, "y": 50, "beta": 0.004},
+            ],
+        })
+        .to_string();
+        let scenario = Scenario::from_document(&parse_document(&text).unwrap()).unwrap();
+        let evaluation = scenario.evaluate(&Options::default());
+        let doc = evaluation_document(&scenario.region, &scenario.ids, &evaluation);
+        (scenario.region, doc)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fixtures::mixed_fleet;
+    use super::*;
+    use crate::coverage::Options;
+
+    fn start_and_end(e: &EdgeDocument) -> (XY, XY) {
+        match *e {
+            EdgeDocument::Segment { from, to } => (from, to),
+            EdgeDocument::Arc {
+                centre,
+                radius,
+                start,
+                sweep,
+            } => {
+                let at = |t: f64| [centre[0] + radius * t.cos(), centre[1] + radius * t.sin()];
+                (at(start), at(start + sweep))
+            }
+        }
+    }
+
+    /// The loops close, bound exactly the cell's area (½∮ x dy − y dx
+    /// along segments and arcs), and only curved cells have them.
+    #[test]
+    fn edge_loops_are_closed_and_bound_the_cell() {
+        let (region, doc) = mixed_fleet();
+        let mut curved = 0;
+        for cell in &doc.cells {
+            if cell.edges.is_empty() {
+                continue;
+            }
+            curved += 1;
+            let mut area = 0.0;
+            for l in &cell.edges {
+                for (k, e) in l.iter().enumerate() {
+                    let (_, end) = start_and_end(e);
+                    let (next, _) = start_and_end(&l[(k + 1) % l.len()]);
+                    assert!(
+                        (end[0] - next[0]).hypot(end[1] - next[1]) < 1e-9,
+                        "{}",
+                        cell.id
+                    );
+                    let piece = match *e {
+                        EdgeDocument::Segment { from, to } => Piece::Segment {
+                            from: Point {
+                                x: from[0],
+                                y: from[1],
+                            },
+                            to: Point { x: to[0], y: to[1] },
+                        },
+                        EdgeDocument::Arc {
+                            centre,
+                            radius,
+                            start,
+                            sweep,
+                        } => Piece::Arc {
+                            centre: Point {
+                                x: centre[0],
+                                y: centre[1],
+                            },
+                            radius,
+                            start,
+                            sweep,
+                        },
+                    };
+                    area += piece.area_share(Point { x: 50.0, y: 50.0 });
+                }
+            }
+            assert!(
+                (area - cell.area).abs() < 1e-9 * cell.area,
+                "{}: {area} vs {}",
+                cell.id,
+                cell.area
+            );
+            assert!(cell.polygon.is_some());
+        }
+        assert!(curved >= 4, "{curved} curved cells");
+        let total: f64 = doc.cells.iter().map(|c| c.area).sum();
+        assert!(
+            (total - region.area()).abs() < 1e-9 * total,
+            "{total} vs {}",
+            region.area()
+        );
+    }
+
+    /// A fleet with one β: no cell has `edges`, and the JSON has no such
+    /// member (straight-edged output unchanged byte for byte).
+    #[test]
+    fn one_beta_gives_no_edges() {
+        let text = serde_json::json!({
+            "region": {"polygon": [[0, 0], [100, 0], [100, 100], [0, 100]],
+                       "holes": [[[44, 44], [56, 44], [56, 56], [44, 56]]]},
+            "risk": {"base": 0.1, "objects": []},
+            "vessels": [{"id": "a", "x": 20, "y": 20}, {"id": "b", "x": 80, "y": 70, "k": 2.0}],
+        })
+        .to_string();
+        let doc = evaluate_text(&text, &Options::default()).unwrap();
+        assert!(doc.cells.iter().all(|c| c.edges.is_empty()));
+        assert!(!serde_json::to_string(&doc).unwrap().contains("edges"));
+    }
 }

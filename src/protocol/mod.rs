@@ -11,7 +11,11 @@
 //! `[A-Za-z0-9_.-]{1,64}`, σ > 0, simple polygons, …) are checked by
 //! `mission::scenario` and answered with `invalid`.
 
+mod cell;
 pub mod peer;
+mod schema;
+
+pub use cell::{CellDocument, EdgeDocument, EvaluationDocument};
 
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
@@ -107,7 +111,8 @@ pub struct VesselDocument {
     /// Actuator strength; default 0.5.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub k: Option<f64>,
-    /// Actuator decay [1/m²]; default 0.001, shared by every vessel.
+    /// Actuator decay [1/m²]; default 0.001. Vessels with different β
+    /// have cells with curved edges (`edges` in the evaluation).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub beta: Option<f64>,
 }
@@ -193,7 +198,8 @@ pub struct GeoVesselDocument {
     /// Actuator strength; default 0.5.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub k: Option<f64>,
-    /// Actuator decay [1/m²]; default 0.001, shared by every vessel.
+    /// Actuator decay [1/m²]; default 0.001. Vessels with different β
+    /// have cells with curved edges (`edges` in the evaluation).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub beta: Option<f64>,
 }
@@ -254,6 +260,81 @@ mod choose {
         Ok(geo || (!local && (has(map, "lat") || has(map, "lon"))))
     }
 
+    /// A vessel's members of either form, read in one pass: a fleet's
+    /// vessels are most of a large document, and going through a `Value`
+    /// (a map and a string per member) took most of its parsing time. The
+    /// form is then chosen as [`geographic`] chooses it, and what the
+    /// chosen form lacks or forbids is refused with serde's own messages.
+    #[derive(serde::Deserialize)]
+    #[serde(deny_unknown_fields)]
+    pub struct VesselKeys {
+        id: Option<String>,
+        x: Option<f64>,
+        y: Option<f64>,
+        lat: Option<f64>,
+        lon: Option<f64>,
+        psi: Option<f64>,
+        k: Option<f64>,
+        beta: Option<f64>,
+    }
+
+    const LOCAL: &[&str] = &["id", "x", "y", "psi", "k", "beta"];
+    const GEO: &[&str] = &["id", "lat", "lon", "psi", "k", "beta"];
+
+    impl VesselKeys {
+        pub fn into_input<E: Error>(self) -> Result<super::VesselInput, E> {
+            let local = self.x.is_some() && self.y.is_some();
+            let geo = self.lat.is_some() && self.lon.is_some();
+            if local && geo {
+                return Err(E::custom(
+                    "give the position as x and y or as lat and lon, not both",
+                ));
+            }
+            let geo = geo || (!local && (self.lat.is_some() || self.lon.is_some()));
+            let (first, second, other, names) = if geo {
+                (
+                    self.lat,
+                    self.lon,
+                    [("x", self.x), ("y", self.y)],
+                    ["lat", "lon"],
+                )
+            } else {
+                (
+                    self.x,
+                    self.y,
+                    [("lat", self.lat), ("lon", self.lon)],
+                    ["x", "y"],
+                )
+            };
+            if let Some((key, _)) = other.iter().find(|(_, v)| v.is_some()) {
+                return Err(E::unknown_field(key, if geo { GEO } else { LOCAL }));
+            }
+            let id = self.id.ok_or_else(|| E::missing_field("id"))?;
+            let first = first.ok_or_else(|| E::missing_field(names[0]))?;
+            let second = second.ok_or_else(|| E::missing_field(names[1]))?;
+            let (psi, k, beta) = (self.psi, self.k, self.beta);
+            Ok(if geo {
+                super::VesselInput::Geo(super::GeoVesselDocument {
+                    id,
+                    lat: first,
+                    lon: second,
+                    psi,
+                    k,
+                    beta,
+                })
+            } else {
+                super::VesselInput::Local(super::VesselDocument {
+                    id,
+                    x: first,
+                    y: second,
+                    psi,
+                    k,
+                    beta,
+                })
+            })
+        }
+    }
+
     /// `Ok(true)` for GeoJSON (a `type` member).
     pub fn geojson<E: Error>(value: &Value) -> Result<bool, E> {
         let Value::Object(map) = value else {
@@ -299,9 +380,7 @@ impl<'de> Deserialize<'de> for RiskObjectInput {
 
 impl<'de> Deserialize<'de> for VesselInput {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let value = serde_json::Value::deserialize(d)?;
-        let geo = choose::geographic(&value)?;
-        choose::either(value, geo, VesselInput::Local, VesselInput::Geo)
+        choose::VesselKeys::deserialize(d)?.into_input()
     }
 }
 
@@ -386,39 +465,6 @@ impl JsonSchema for GeoJsonRegion {
             ],
         })
     }
-}
-
-/// Result of `evaluate`: cells in the order of the request's vessels.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
-pub struct EvaluationDocument {
-    /// The coverage metric H(P) = Σ M_i.
-    #[serde(rename = "H")]
-    pub h: f64,
-    pub cells: Vec<CellDocument>,
-}
-
-/// Figures of one cell.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
-pub struct CellDocument {
-    pub id: String,
-    /// M_i = ∫_{V_i} f_i Φ.
-    pub mass: f64,
-    /// C_i; the nearest point of the region for an empty cell.
-    #[schema(value_type = Vec<f64>, min_items = 2, max_items = 2)]
-    pub centroid: XY,
-    /// [m²].
-    pub area: f64,
-    /// Outer ring of the cell (of its largest piece when it has several),
-    /// counter-clockwise, without the closing vertex; `null` when empty.
-    #[schema(schema_with = schema::cell_polygon, required = true)]
-    pub polygon: Option<Vec<XY>>,
-    /// Every piece with its holes, present only when the cell is not one
-    /// simple polygon (several pieces, or a hole of Q inside it).
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub pieces: Vec<RegionDocument>,
-    /// ∂H/∂p_i = 2β M_i (C_i − p_i).
-    #[schema(value_type = Vec<f64>, min_items = 2, max_items = 2)]
-    pub gradient: XY,
 }
 
 /// `{"error": {"code", "message"}}`.
@@ -645,6 +691,10 @@ pub struct VesselStatusDocument {
     /// The cell's outer ring; `null` when the vessel has no cell.
     #[schema(schema_with = schema::status_polygon, required = true)]
     pub polygon: Option<Vec<XY>>,
+    /// The cell's exact boundary when it has an arc, as
+    /// [`CellDocument::edges`]; absent otherwise.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub edges: Vec<Vec<EdgeDocument>>,
     pub mass: f64,
     /// The cell's centroid, the vessel's goal; `null` without a cell.
     #[schema(value_type = Option<Vec<f64>>, min_items = 2, max_items = 2, required = true)]
@@ -694,68 +744,6 @@ pub struct SnapshotDocument {
     pub vessels: Vec<VesselStatusDocument>,
 }
 
-/// OpenAPI schemas of the rings. utoipa reads field types by name and cannot
-/// see through the [`XY`] alias (schemars can): a lone `XY` field says
-/// `value_type = Vec<f64>, min_items = 2, max_items = 2`, and lists of them
-/// come from here, with their descriptions (utoipa drops a field's doc
-/// comment when `schema_with` builds its schema).
-mod schema {
-    use utoipa::openapi::schema::{ArrayBuilder, ObjectBuilder, SchemaType, Type};
-    use utoipa::openapi::{KnownFormat, SchemaFormat};
-
-    /// `[x, y]`: exactly two numbers, as serde reads `[f64; 2]`.
-    fn xy() -> ArrayBuilder {
-        ArrayBuilder::new()
-            .items(
-                ObjectBuilder::new()
-                    .schema_type(Type::Number)
-                    .format(Some(SchemaFormat::KnownFormat(KnownFormat::Double))),
-            )
-            .min_items(Some(2))
-            .max_items(Some(2))
-    }
-
-    /// `[[x, y], …]`.
-    fn points() -> ArrayBuilder {
-        ArrayBuilder::new().items(xy())
-    }
-
-    fn ring(description: &str) -> ArrayBuilder {
-        points().description(Some(description))
-    }
-
-    fn or_null(array: ArrayBuilder) -> ArrayBuilder {
-        array.schema_type(
-            [Type::Array, Type::Null]
-                .into_iter()
-                .collect::<SchemaType>(),
-        )
-    }
-
-    pub fn region_polygon() -> ArrayBuilder {
-        ring("Outer ring `[[x, y], …]` in metres, without the closing vertex.")
-    }
-
-    pub fn region_holes() -> ArrayBuilder {
-        ArrayBuilder::new().items(points()).description(Some(
-            "Islands: rings strictly inside the polygon and disjoint.",
-        ))
-    }
-
-    pub fn cell_polygon() -> ArrayBuilder {
-        or_null(ring(
-            "Outer ring of the cell (of its largest piece when it has several), \
-             counter-clockwise, without the closing vertex; `null` when empty.",
-        ))
-    }
-
-    pub fn status_polygon() -> ArrayBuilder {
-        or_null(ring(
-            "The cell's outer ring; `null` when the vessel has no cell.",
-        ))
-    }
-}
-
 /// `PUT /api/v1/mission/risk/base` body: the new base density φ0.
 #[derive(Serialize, Deserialize, ToSchema)]
 #[serde(deny_unknown_fields)]
@@ -787,3 +775,6 @@ pub struct CoverageSampleDocument {
     #[serde(rename = "H")]
     pub h: f64,
 }
+
+#[cfg(test)]
+mod tests;

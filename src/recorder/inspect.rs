@@ -443,6 +443,7 @@ mod tests {
                         area: 10_000.0,
                         polygon: None,
                         pieces: Vec::new(),
+                        edges: Vec::new(),
                     }]
                 } else {
                     Vec::new()
@@ -453,6 +454,7 @@ mod tests {
                     live: vessel,
                     controlled: vessel,
                     last_seen: None,
+                    actuator: None,
                 }],
             };
             let ns = (time * 1e9).round() as u64;

@@ -92,6 +92,10 @@ pub struct CellRecord {
     /// Every piece with its holes, when the cell is not one simple polygon.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub pieces: Vec<crate::protocol::RegionDocument>,
+    /// The exact boundary of a cell with an arc (vessels with different
+    /// β), as the wire's `edges`, unrounded; absent otherwise.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub edges: Vec<Vec<crate::protocol::EdgeDocument>>,
 }
 
 impl CellRecord {
@@ -105,6 +109,7 @@ impl CellRecord {
             area: c.area,
             polygon: c.polygon.as_ref().map(ring),
             pieces: c.pieces.clone(),
+            edges: c.edges.clone(),
         }
     }
 
@@ -117,6 +122,7 @@ impl CellRecord {
             area: self.area,
             polygon: self.polygon.clone(),
             pieces: self.pieces.clone(),
+            edges: self.edges.clone(),
             gradient: [0.0, 0.0],
         }
     }
@@ -131,6 +137,10 @@ pub struct VesselState {
     pub controlled: bool,
     /// Mission time of its newest pose [s]; `null` before the first.
     pub last_seen: Option<f64>,
+    /// Its actuator when it is not the mission's (a vessel that declared
+    /// its own in its hello); absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub actuator: Option<crate::protocol::ActuatorDocument>,
 }
 
 /// [`MISSION`].
@@ -320,5 +330,52 @@ mod tests {
         assert_eq!(ns(-1.0), 0);
         assert_eq!(ns(f64::NAN), 0);
         assert_eq!(FoxgloveTime::from_ns(2_000_000_123).nsec, 123);
+    }
+
+    /// A tick of a fleet with different β: its curved cells keep their
+    /// exact edges (unrounded), a vessel its own actuator, and the message
+    /// is valid against the schema the channel carries.
+    #[test]
+    fn curved_cells_are_recorded_with_their_edges() {
+        let (_, doc) = crate::mission::scenario::fixtures::mixed_fleet();
+        let record = CoverageRecord {
+            tick: 1,
+            time: 0.1,
+            h: doc.h,
+            cells: doc.cells.iter().map(CellRecord::of).collect(),
+            vessels: vec![VesselState {
+                id: "near-1".into(),
+                connected: true,
+                live: true,
+                controlled: true,
+                last_seen: Some(0.1),
+                actuator: Some(crate::protocol::ActuatorDocument {
+                    k: 0.5,
+                    beta: 0.004,
+                }),
+            }],
+        };
+        let curved: Vec<&CellRecord> = record
+            .cells
+            .iter()
+            .filter(|c| !c.edges.is_empty())
+            .collect();
+        assert!(!curved.is_empty());
+        for (c, d) in record.cells.iter().zip(&doc.cells) {
+            assert_eq!(c.edges, d.edges);
+            assert_eq!(c.document().edges, d.edges);
+        }
+        let value = serde_json::to_value(&record).unwrap();
+        let schema: serde_json::Value =
+            serde_json::from_slice(&spec::<CoverageRecord>().schema).unwrap();
+        let validator = jsonschema::draft202012::new(&schema).unwrap();
+        let errors: Vec<String> = validator
+            .iter_errors(&value)
+            .map(|e| e.to_string())
+            .collect();
+        assert!(errors.is_empty(), "{errors:?}");
+        assert!(value.to_string().contains(r#""kind":"arc""#));
+        let back: CoverageRecord = serde_json::from_value(value).unwrap();
+        assert_eq!(back, record);
     }
 }

@@ -465,6 +465,7 @@ impl Writer {
                     live: v.live,
                     controlled: v.controlled,
                     last_seen: v.last_seen,
+                    actuator: (v.actuator != doc.mission.actuator).then_some(v.actuator),
                 })
                 .collect(),
         };

@@ -56,6 +56,12 @@ enum Event {
     Gone(String),
 }
 
+/// How long after a put a vessel may still beacon an older revision (the
+/// put and its beacon in flight) before the revision is published again,
+/// and the longest interval between such repeats.
+const REPEAT_FIRST: Duration = Duration::from_millis(300);
+const REPEAT_MAX: Duration = Duration::from_secs(8);
+
 /// Joins the fleet and runs until `shutdown`.
 pub async fn run(
     member: PeerMember,
@@ -70,10 +76,12 @@ pub async fn run(
     let keys = Keys {
         fleet: member.fleet.clone(),
     };
-    // The highest revision the fleet holds now.
+    // The highest revision the fleet holds now: every member's answer
+    // (Zenoh's default consolidation would keep only the last to arrive).
     let mut fleet_revision: Option<(u32, MissionDocument)> = None;
     if let Ok(replies) = session
         .get(keys.mission())
+        .consolidation(zenoh::query::ConsolidationMode::None)
         .timeout(Duration::from_secs(1))
         .await
     {
@@ -111,8 +119,12 @@ pub async fn run(
         })
         .await
         .map_err(zerr)?;
+    // A revision is rare and must not be dropped by a full queue (the
+    // default for puts): block instead, and go ahead of the beacons.
     let publisher = session
         .declare_publisher(keys.mission())
+        .congestion_control(zenoh::qos::CongestionControl::Block)
+        .priority(zenoh::qos::Priority::InteractiveHigh)
         .await
         .map_err(zerr)?;
     let put = |json: &Arc<Vec<u8>>| publisher.put(json.as_slice().to_vec());
@@ -162,10 +174,14 @@ pub async fn run(
 
     let mut snapshots = app.snapshot.clone();
     let mut revision = revision;
+    // When the revision last went out, and how long a vessel may beacon an
+    // older one before it goes out again (doubling while any lags).
+    let mut put_at = tokio::time::Instant::now();
+    let mut repeat = REPEAT_FIRST;
     let mut last = ours;
     let mut heard: BTreeMap<String, Heard> = BTreeMap::new();
-    // Vessels the tick task refused (another β, a full fleet), with the
-    // actuator they had: asked again only when it changes.
+    // Vessels the tick task refused (an actuator out of range, a full
+    // fleet), with the actuator they had: asked again only when it changes.
     let mut refused: BTreeMap<String, (f64, f64)> = BTreeMap::new();
     // Each vessel's own neighbour count, asked of the fleet every second.
     let mut ask = tokio::time::interval(Duration::from_secs(1));
@@ -206,6 +222,7 @@ pub async fn run(
                     if let Err(e) = put(&json).await {
                         tracing::warn!(error = %e, "mission revision not published");
                     }
+                    (put_at, repeat) = (tokio::time::Instant::now(), REPEAT_FIRST);
                     metrics::gauge!(PEER_REVISION).set(revision as f64);
                     tracing::info!(revision, "published a new mission revision to the fleet");
                     last = mission;
@@ -243,8 +260,24 @@ pub async fn run(
                         if let Err(e) = put(&json).await {
                             tracing::warn!(error = %e, "mission revision not published");
                         }
+                        (put_at, repeat) = (tokio::time::Instant::now(), REPEAT_FIRST);
                         metrics::gauge!(PEER_REVISION).set(revision as f64);
                         tracing::info!(revision, "the fleet had a newer revision: the mission published again above it");
+                    }
+                    // A vessel still on an older revision once the put had
+                    // time to arrive: the put was lost to it (UDP, a link
+                    // down), and so perhaps to its neighbours, whose beacons
+                    // would otherwise tell it to ask. Published again, at
+                    // doubling intervals while any vessel lags, so one that
+                    // refuses the document costs little.
+                    if beacon.rev < revision && put_at.elapsed() >= repeat {
+                        let json = published.lock().expect("mission lock").clone();
+                        if let Err(e) = put(&json).await {
+                            tracing::warn!(error = %e, "mission revision not published");
+                        }
+                        put_at = tokio::time::Instant::now();
+                        repeat = (repeat * 2).min(REPEAT_MAX);
+                        tracing::debug!(vessel = %id, held = beacon.rev, revision, "a vessel lags: the revision published again");
                     }
                     if let Some(h) = heard.get(&id) {
                         h.poses.send_replace(Some(pose));

@@ -41,7 +41,7 @@ error_responses! {
     NotFound => "`not_found`: no such id.",
     Conflict => "`conflict`: the id is taken.",
     TooLarge => "`too_large`: the body is over 1 MiB.",
-    Invalid => "`invalid` (out-of-range or non-finite values, bad polygons, bad or duplicate ids, positions in WGS84 without an origin (`origin`) or beyond 50 km of it, …) or `unsupported` (vessels with different β). The message starts with the offending field.",
+    Invalid => "`invalid` (out-of-range or non-finite values, bad polygons, bad or duplicate ids, positions in WGS84 without an origin (`origin`) or beyond 50 km of it, …). The message starts with the offending field.",
     RateLimited => "`rate_limited`: too many writes; `Retry-After` says when to try again.",
     NotStored => "`storage`: the change could not be made durable and was not applied.",
     ShuttingDown => "`shutting_down`: the coordinator is stopping.",

@@ -186,15 +186,10 @@ impl Config {
             zone,
         )
         .ok_or_else(|| SimError::Io(format!("no room for {n} random starts in the region")))?;
-        let beta = self.scenario.fleet.beta();
         let vessels = drawn
             .iter()
             .zip(self.scenario.fleet.vessels())
-            .map(|((q, _), v)| Vessel {
-                position: *q,
-                k: v.k,
-                beta,
-            })
+            .map(|((q, _), v)| Vessel { position: *q, ..*v })
             .collect();
         self.scenario.fleet = Fleet::new(vessels)
             .map_err(|e| SimError::Scenario(crate::mission::scenario::ScenarioError::Input(e)))?;

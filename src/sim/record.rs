@@ -91,7 +91,12 @@ pub fn record(
         );
         let cells = evaluation_document(&config.scenario.region, ids, &evaluation).cells;
         let mut vessels = Vec::with_capacity(ids.len());
-        for ((id, v), cell) in ids.iter().zip(&tick.vessels).zip(&cells) {
+        for (((id, v), cell), own) in ids
+            .iter()
+            .zip(&tick.vessels)
+            .zip(&cells)
+            .zip(fleet.vessels())
+        {
             let s = v.state;
             let pose = PoseDocument {
                 t: tick.t,
@@ -123,8 +128,13 @@ pub fn record(
                 live: true,
                 controlled: true,
                 pose: Some(pose),
-                actuator: mission.actuator,
+                // Each vessel's own: a mixed fleet's β differ.
+                actuator: ActuatorDocument {
+                    k: own.k,
+                    beta: own.beta,
+                },
                 polygon: cell.polygon.clone(),
+                edges: cell.edges.clone(),
                 mass: cell.mass,
                 centroid: Some(cell.centroid),
                 last_command: Some(CommandDocument {

@@ -79,14 +79,9 @@ pub struct Run {
 }
 
 pub(super) fn fleet_at(config: &Config, positions: impl Iterator<Item = Point>) -> Option<Fleet> {
-    let beta = config.scenario.fleet.beta();
     let vessels = positions
         .zip(config.scenario.fleet.vessels())
-        .map(|(position, v)| Vessel {
-            position,
-            k: v.k,
-            beta,
-        })
+        .map(|(position, v)| Vessel { position, ..*v })
         .collect();
     Fleet::new(vessels).ok()
 }

@@ -305,6 +305,28 @@ fn the_link_schema_agrees_with_serde_on_edge_cases() {
     }
 }
 
+/// A curved cell's edges: the schema accepts exactly what serde accepts.
+#[test]
+fn the_edge_schema_agrees_with_serde() {
+    use seacover::protocol::EdgeDocument;
+    let doc = openapi_document();
+    let schema = component(&doc, "EdgeDocument");
+    let cases = [
+        json!({"kind": "segment", "from": [0, 0], "to": [1.5, 2]}),
+        json!({"kind": "arc", "centre": [50, 50], "radius": 20, "start": 0, "sweep": -6.0}),
+        json!({"kind": "arc", "centre": [50, 50], "radius": 20, "start": 0}),
+        json!({"kind": "arc", "centre": [50], "radius": 20, "start": 0, "sweep": 1}),
+        json!({"kind": "segment", "from": [0, 0, 0], "to": [1, 2]}),
+        json!({"kind": "circle", "centre": [0, 0], "radius": 1}),
+        json!({"from": [0, 0], "to": [1, 2]}),
+        json!({"kind": "segment", "from": [0, 0], "to": "here"}),
+    ];
+    for case in cases {
+        let serde_accepts = serde_json::from_value::<EdgeDocument>(case.clone()).is_ok();
+        assert_eq!(errors(&schema, &case).is_empty(), serde_accepts, "{case}");
+    }
+}
+
 /// The request bodies' schemas in the OpenAPI document accept exactly what
 /// serde accepts.
 #[test]
@@ -553,6 +575,19 @@ async fn the_real_server_speaks_as_documented() {
         .unwrap();
     assert_eq!(response.status(), 200);
     let evaluation: Value = response.json().await.unwrap();
+    assert_valid(&component(&doc, "EvaluationDocument"), &evaluation);
+    // A fleet with different β: curved cells with their `edges`.
+    let mut mixed = scenario.clone();
+    mixed["vessels"][6]["beta"] = json!(0.004);
+    let response = client
+        .post(server.http("/api/v1/coverage/evaluate"))
+        .json(&mixed)
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(response.status(), 200);
+    let evaluation: Value = response.json().await.unwrap();
+    assert!(evaluation["cells"][6]["edges"].is_array(), "{evaluation}");
     assert_valid(&component(&doc, "EvaluationDocument"), &evaluation);
     let response = client
         .post(server.http("/api/v1/coverage/evaluate"))

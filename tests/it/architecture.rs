@@ -35,6 +35,7 @@ const CORE_DEPENDENCIES: &[&str] = &[
     "rand_chacha",
     "rayon",
     "rstar",
+    "smallvec",
     "thiserror",
 ];
 

@@ -216,11 +216,40 @@ fn bad_values_are_rejected_naming_the_field() {
     }
 }
 
+/// Vessels with different β (once refused as `unsupported`) are one
+/// fleet: the cells tile the region and the vessel with the larger β has
+/// arcs in its exact boundary, `edges`, beside its densified `polygon`.
 #[test]
-fn mixed_beta_is_reported_as_unsupported() {
-    let (code, msg) = rejected(&with(paper(), |d| d["vessels"][6]["beta"] = json!(0.002)));
-    assert_eq!(code, "unsupported");
-    assert!(msg.starts_with("vessels[6].beta"), "{msg}");
+fn mixed_beta_gives_curved_cells() {
+    let out = run(
+        &["evaluate"],
+        &with(paper(), |d| d["vessels"][6]["beta"] = json!(0.004)),
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let cells = v["cells"].as_array().unwrap();
+    let area: f64 = cells.iter().map(|c| c["area"].as_f64().unwrap()).sum();
+    assert!((area - 1e4).abs() < 1e-8, "{area}");
+    let arcs = |c: &Value| {
+        c["edges"].as_array().map_or(0, |loops| {
+            loops
+                .iter()
+                .flat_map(|l| l.as_array().unwrap())
+                .filter(|e| e["kind"] == "arc")
+                .count()
+        })
+    };
+    assert!(arcs(&cells[6]) > 0, "{}", cells[6]);
+    for c in cells {
+        assert!(c["polygon"].as_array().unwrap().len() >= 3, "{c}");
+    }
+    // A fleet with one β answers without `edges`, as before.
+    let out = run(&["evaluate"], &paper().to_string());
+    assert!(!String::from_utf8(out.stdout).unwrap().contains("edges"));
 }
 
 #[test]

@@ -14,6 +14,7 @@ mod architecture;
 mod ardupilot_peer;
 mod ardupilot_sitl;
 mod cli;
+mod curved;
 mod dashboard;
 mod dashboard_ux;
 mod engine;

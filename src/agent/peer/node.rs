@@ -17,6 +17,7 @@ use tokio_util::sync::CancellationToken;
 use tokio_util::task::TaskTracker;
 use zenoh::Wait;
 use zenoh::qos::CongestionControl;
+use zenoh::query::ConsolidationMode;
 
 use super::board::{Board, Revision};
 use super::table::Table;
@@ -44,10 +45,28 @@ struct Shared {
     /// The last beacon each of this process's vessels sent: a sample with
     /// an own id but other bytes is somebody else claiming it.
     sent: Mutex<BTreeMap<String, Vec<u8>>>,
+    /// Woken when a beacon carries a newer revision than the one held: a
+    /// revision this member missed (a lost put over UDP) is asked for at
+    /// once, not at the next one-second poll.
+    behind: tokio::sync::Notify,
     config: PeerConfig,
 }
 
 impl Shared {
+    /// An answer to this member's own query: the fleet's members answer
+    /// with whatever revision they hold, most of them the one this member
+    /// already has or an older one; only a newer one is news (the rest are
+    /// not refusals, nobody sent them unasked).
+    fn offer_answer(&self, bytes: &[u8]) {
+        let held = self.mission.borrow().as_ref().map(|r| r.revision);
+        if let (Ok(doc), Some(h)) = (wire::decode_mission(bytes), held)
+            && doc.revision <= h
+        {
+            return;
+        }
+        self.offer_mission(bytes);
+    }
+
     fn offer_mission(&self, bytes: &[u8]) {
         let result = wire::decode_mission(bytes).and_then(|doc| {
             let mut board = self.board.lock().expect("board lock");
@@ -111,6 +130,7 @@ impl Member {
             board: Mutex::new(Board::default()),
             mission: mission_tx,
             sent: Mutex::new(BTreeMap::new()),
+            behind: tokio::sync::Notify::new(),
             config: config.clone(),
         });
         if let Some(doc) = &config.mission {
@@ -133,7 +153,7 @@ impl Member {
                         == Some(&bytes[..])
                 });
                 let ageing = s.config.ageing;
-                s.table.lock().expect("table lock").offer(
+                let rev = s.table.lock().expect("table lock").offer(
                     key,
                     &bytes,
                     local,
@@ -141,6 +161,10 @@ impl Member {
                     utc_now(),
                     &ageing,
                 );
+                let held = s.mission.borrow().as_ref().map(|r| r.revision);
+                if rev.is_some_and(|rev| held.is_none_or(|h| rev > h)) {
+                    s.behind.notify_one();
+                }
             })
             .background()
             .await
@@ -167,7 +191,9 @@ impl Member {
             .map_err(zerr)?;
         // Until a mission is held, and whenever a neighbour's beacon shows a
         // newer revision than the one held (one published while this member
-        // was cut off), ask the fleet for it, at most once a second.
+        // was cut off, or a put lost on UDP), ask the fleet for it: at once
+        // when such a beacon arrives, then again every second while behind,
+        // but never more often than every 200 ms.
         let (s, z, stop) = (shared.clone(), session.clone(), shutdown.clone());
         tasks.spawn(async move {
             while !stop.is_cancelled() {
@@ -177,21 +203,32 @@ impl Member {
                     None => true,
                     Some(h) => newest.is_some_and(|n| n > h),
                 };
+                // No consolidation: Zenoh's default for a get (`Latest`)
+                // holds every reply back until the last member has
+                // answered, then keeps one per key, without timestamps the
+                // last to arrive, often a neighbour's older revision. Each
+                // answer is taken as it comes; the board keeps the newest.
                 if behind
                     && let Ok(replies) = z
                         .get(s.keys.mission())
+                        .consolidation(ConsolidationMode::None)
                         .timeout(Duration::from_secs(1))
                         .await
                 {
                     while let Ok(reply) = replies.recv_async().await {
                         if let Ok(sample) = reply.result() {
-                            s.offer_mission(&sample.payload().to_bytes());
+                            s.offer_answer(&sample.payload().to_bytes());
                         }
                     }
                 }
+                let woken = async {
+                    tokio::time::sleep(Duration::from_millis(200)).await;
+                    s.behind.notified().await;
+                };
                 tokio::select! {
                     _ = stop.cancelled() => break,
                     _ = tokio::time::sleep(Duration::from_secs(1)) => {}
+                    _ = woken => {}
                 }
             }
         });

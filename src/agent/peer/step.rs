@@ -7,9 +7,9 @@
 //! Invariants: only fresh neighbours are in the partition (a silent one's
 //! water is taken over); every neighbour not yet forgotten is in the
 //! safety filter's traffic, a silent one with its uncertainty radius and
-//! not trusted to keep its half of a gap; neighbours with another β than
-//! this vessel's are left out of the partition (curved cell edges are the
-//! engine's next step) but kept as traffic. Pure: no I/O, no clock.
+//! not trusted to keep its half of a gap; a neighbour with another β than
+//! this vessel's bounds its cell by a circle (the engine's curved cells).
+//! Pure: no I/O, no clock.
 
 use super::table::Neighbour;
 use crate::control::Vec3;
@@ -98,7 +98,7 @@ pub fn step(
     };
     let fresh: Vec<Vessel> = neighbours
         .iter()
-        .filter(|n| n.silent.is_none() && n.beacon.beta == beta)
+        .filter(|n| n.silent.is_none())
         .map(|n| Vessel {
             position: Point {
                 x: n.beacon.x,

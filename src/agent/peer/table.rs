@@ -146,6 +146,11 @@ impl Table {
         *self.refused.entry(why).or_default() += 1;
     }
 
+    fn refused_with(&mut self, why: Refusal) -> Option<u32> {
+        self.refuse(why);
+        None
+    }
+
     pub fn refused(&self) -> BTreeMap<String, u64> {
         self.refused
             .iter()
@@ -183,20 +188,20 @@ impl Table {
         now: Instant,
         now_utc: f64,
         ageing: &Ageing,
-    ) {
+    ) -> Option<u32> {
         self.received += 1;
         let Some((fleet, key_id)) = wire::Keys::parse_beacon(key) else {
-            return self.refuse(Refusal::Undecodable);
+            return self.refused_with(Refusal::Undecodable);
         };
         if fleet != self.fleet {
-            return self.refuse(Refusal::OtherFleet);
+            return self.refused_with(Refusal::OtherFleet);
         }
         let beacon = match wire::decode(payload, key_id) {
             Ok(b) => b,
-            Err(why) => return self.refuse(why),
+            Err(why) => return self.refused_with(why),
         };
         if self.own.contains(&beacon.id) && !local {
-            return self.refuse(Refusal::IdConflict);
+            return self.refused_with(Refusal::IdConflict);
         }
         let known = self.ids.get(&beacon.id).copied();
         if let Some(prev) = known.map(|slot| self.slot(slot)) {
@@ -204,12 +209,12 @@ impl Table {
             let dt = beacon.t - prev.beacon.t;
             if fresh && dt <= 0.0 {
                 // Late or repeated: the newer one is already here.
-                return;
+                return None;
             }
             let moved = (beacon.x - prev.beacon.x).hypot(beacon.y - prev.beacon.y);
             // Sender seconds are wall seconds: the hull covers warp × as much.
             if fresh && moved > wire::MAX_SPEED * dt * ageing.warp + 5.0 {
-                return self.refuse(Refusal::IdConflict);
+                return self.refused_with(Refusal::IdConflict);
             }
         }
         let transit = (now_utc - beacon.t).clamp(0.0, MAX_TRANSIT);
@@ -230,12 +235,14 @@ impl Table {
             }
         };
         let key = self.index.place(slot, old, (beacon.x, beacon.y), now);
+        let rev = beacon.rev;
         self.slots[slot] = Some(Heard {
             beacon,
             arrived: now,
             transit,
             key,
         });
+        Some(rev)
     }
 
     fn drop_actuator(&mut self, b: &BeaconDocument) {

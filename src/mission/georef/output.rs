@@ -12,6 +12,12 @@
 //!   full f64 (a nanometre of longitude is 1e-14°), never rounded to a
 //!   fixed number of decimals.
 //!
+//! GeoJSON has no arcs: a curved cell (vessels with different β) is its
+//! `polygon` and `pieces`, whose vertices lie on the arcs densely enough
+//! that every point of an arc is within 0.1 m of the chords
+//! ([`cell_outline`](crate::mission::scenario::cell_outline)); its exact
+//! `edges` stay in the local documents.
+//!
 //! A cell is a `Polygon`, or a `MultiPolygon` when it has several pieces;
 //! an empty cell, or a vessel that never reported a pose, has a `null`
 //! geometry (allowed by RFC 7946, 3.2), so that every cell and vessel of
@@ -136,4 +142,158 @@ pub fn coverage(
         )
     });
     FeatureCollection::new(cells.chain(boats))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::Point;
+    use crate::geometry::arcs::Piece;
+    use crate::geometry::geodesy::LatLon;
+    use crate::mission::scenario::fixtures::mixed_fleet;
+    use crate::protocol::EdgeDocument;
+
+    fn piece(edge: &EdgeDocument) -> Piece {
+        let p = |[x, y]: XY| Point { x, y };
+        match *edge {
+            EdgeDocument::Segment { from, to } => Piece::Segment {
+                from: p(from),
+                to: p(to),
+            },
+            EdgeDocument::Arc {
+                centre,
+                radius,
+                start,
+                sweep,
+            } => Piece::Arc {
+                centre: p(centre),
+                radius,
+                start,
+                sweep,
+            },
+        }
+    }
+
+    fn segment_distance(q: Point, a: Point, b: Point) -> f64 {
+        Piece::Segment { from: a, to: b }.distance2(q).sqrt()
+    }
+
+    /// Every polygon of a curved cell in `coverage.geojson`, read back into
+    /// the plane: each vertex is on the cell's exact boundary (on its
+    /// circle for an arc) and every point of every arc is within 0.1 m of
+    /// the outline, while the rings stay closed and right-handed.
+    #[test]
+    fn curved_cells_are_dense_polygons_within_a_tenth_of_a_metre_of_their_arcs() {
+        let (_, doc) = mixed_fleet();
+        let frame = LocalFrame::new(LatLon::new(-35.363261, 149.16523).unwrap()).unwrap();
+        let collection = serde_json::to_value(coverage(&frame, &doc.cells, &[])).unwrap();
+        let features = collection["features"].as_array().unwrap();
+        assert_eq!(features.len(), doc.cells.len());
+        let mut arcs_checked = 0;
+        for (cell, feature) in doc.cells.iter().zip(features) {
+            assert_eq!(feature["properties"]["id"], cell.id.as_str());
+            if cell.edges.is_empty() {
+                continue;
+            }
+            let geometry = &feature["geometry"];
+            let polygons: Vec<&Value> = match geometry["type"].as_str().unwrap() {
+                "Polygon" => vec![&geometry["coordinates"]],
+                "MultiPolygon" => geometry["coordinates"].as_array().unwrap().iter().collect(),
+                other => panic!("{}: a {other}", cell.id),
+            };
+            // Rings in the plane, closing vertex included.
+            let mut rings: Vec<Vec<Point>> = Vec::new();
+            for polygon in polygons {
+                for (k, ring) in polygon.as_array().unwrap().iter().enumerate() {
+                    let lonlat: Vec<[f64; 2]> = serde_json::from_value(ring.clone()).unwrap();
+                    assert!(lonlat.len() >= 4);
+                    assert_eq!(lonlat.first(), lonlat.last(), "{}: a closed ring", cell.id);
+                    let area2: f64 = lonlat
+                        .windows(2)
+                        .map(|w| w[0][0] * w[1][1] - w[1][0] * w[0][1])
+                        .sum();
+                    assert_eq!(area2 > 0.0, k == 0, "{}: right-hand rule", cell.id);
+                    rings.push(
+                        lonlat
+                            .iter()
+                            .map(|&[lon, lat]| {
+                                let (x, y) = frame.to_local(LatLon::new(lat, lon).unwrap());
+                                Point { x, y }
+                            })
+                            .collect(),
+                    );
+                }
+            }
+            let pieces: Vec<Piece> = cell.edges.iter().flatten().map(piece).collect();
+            let to_boundary = |q: Point| {
+                pieces
+                    .iter()
+                    .map(|p| p.distance2(q))
+                    .fold(f64::INFINITY, f64::min)
+                    .sqrt()
+            };
+            for q in rings.iter().flatten() {
+                // The geodetic round trip is good to nanometres here.
+                assert!(
+                    to_boundary(*q) < 1e-6,
+                    "{}: a vertex off the boundary by {} m",
+                    cell.id,
+                    to_boundary(*q)
+                );
+            }
+            let to_outline = |q: Point| {
+                rings
+                    .iter()
+                    .flat_map(|r| r.windows(2))
+                    .map(|w| segment_distance(q, w[0], w[1]))
+                    .fold(f64::INFINITY, f64::min)
+            };
+            for p in &pieces {
+                let Piece::Arc {
+                    centre,
+                    radius,
+                    start,
+                    sweep,
+                } = *p
+                else {
+                    continue;
+                };
+                arcs_checked += 1;
+                // Vertices of this arc are on its circle.
+                let on_arc = rings
+                    .iter()
+                    .flatten()
+                    .filter(|q| p.distance2(**q).sqrt() < 1e-6)
+                    .count();
+                assert!(on_arc >= 2, "{}: an arc with {on_arc} vertices", cell.id);
+                for q in rings
+                    .iter()
+                    .flatten()
+                    .filter(|q| p.distance2(**q).sqrt() < 1e-6)
+                {
+                    let r = ((q.x - centre.x).powi(2) + (q.y - centre.y).powi(2)).sqrt();
+                    assert!((r - radius).abs() < 1e-6, "{}: {r} vs {radius}", cell.id);
+                }
+                // Every point of the arc is within 0.1 m of a chord.
+                let worst = (0..=400)
+                    .map(|k| {
+                        let t = start + sweep * k as f64 / 400.0;
+                        to_outline(Point {
+                            x: centre.x + radius * t.cos(),
+                            y: centre.y + radius * t.sin(),
+                        })
+                    })
+                    .fold(0.0, f64::max);
+                assert!(
+                    worst <= 0.1 + 1e-6,
+                    "{}: an arc {worst} m from the outline",
+                    cell.id
+                );
+            }
+        }
+        assert!(
+            arcs_checked >= 4,
+            "the mixed fleet has arcs: {arcs_checked}"
+        );
+    }
 }

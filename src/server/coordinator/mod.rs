@@ -40,8 +40,8 @@ use super::store::Store;
 use crate::control::barrier::Scratch;
 use crate::control::guidance::{Agility, Guidance};
 use crate::control::model::State;
+use crate::coverage::cells::cells_with;
 use crate::coverage::evaluate::cell_figures;
-use crate::coverage::partition::power_cells_with;
 use crate::coverage::{CellResult, Evaluation, Fleet, Options, Vessel, evaluate};
 use crate::geometry::Point;
 use crate::mission::scenario::evaluation_document;
@@ -390,16 +390,16 @@ impl Coordinator {
                         }
                     }
                 };
-                if !(actuator.k.is_finite() && actuator.k > 0.0) {
-                    let _ = reply.send(Err(ApiError::Invalid(
-                        "actuator.k: must be a finite number > 0".into(),
-                    )));
-                    return false;
-                }
-                if actuator.beta != self.mission.actuator.beta {
-                    let _ = reply.send(Err(ApiError::Unsupported(format!(
-                        "actuator.beta: the mission's vessels share beta = {}; different beta give curved cell edges",
-                        self.mission.actuator.beta
+                // The engine's bounds: a vessel outside them would make
+                // every tick's fleet invalid. Vessels may have different β
+                // (cells with curved edges).
+                use crate::coverage::fleet::{MAX_BETA, MAX_K};
+                let out_of_range = [("k", actuator.k, MAX_K), ("beta", actuator.beta, MAX_BETA)]
+                    .into_iter()
+                    .find(|&(_, x, max)| !(x.is_finite() && x > 0.0 && x <= max));
+                if let Some((field, value, max)) = out_of_range {
+                    let _ = reply.send(Err(ApiError::Invalid(format!(
+                        "actuator.{field}: must be a finite number in (0, {max:e}], got {value}"
                     ))));
                     return false;
                 }

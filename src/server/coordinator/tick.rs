@@ -95,7 +95,7 @@ impl Coordinator {
             ..Options::default()
         };
         let parallel = entries.len() >= crate::coverage::PARALLEL_MIN;
-        let geometries = power_cells_with(&mission.region, &fleet, parallel);
+        let geometries = cells_with(&mission.region, &fleet, parallel);
         // Goals inside the vessel's own piece of water, routes round islands
         // and the collision filter: the same functions as `seacover sim`.
         let layer = &mission.layer;
@@ -114,7 +114,6 @@ impl Coordinator {
                 &mission.region,
                 &mission.risk,
                 vessel,
-                fleet.beta(),
                 geometry,
                 &options,
                 near,
@@ -278,6 +277,7 @@ impl Coordinator {
                     pose: e.pose.clone(),
                     actuator: e.actuator,
                     polygon: cell.and_then(|c| c.polygon.clone()),
+                    edges: cell.map_or_else(Vec::new, |c| c.edges.clone()),
                     mass: cell.map_or(0.0, |c| c.mass),
                     centroid: cell.map(|c| c.centroid),
                     last_command: e.last_command.clone(),

@@ -15,7 +15,12 @@
 //! When |d| ≤ 1e-9 max(β_i, β_j) the circle's radius is beyond 1e9 ‖P‖
 //! (1e11 m for vessels 100 m apart) and its arc across any region is a
 //! straight line to rounding; the d‖y‖² term is dropped (over a region of
-//! 1e4 m it moves the edge by under 1e-9 · β‖y‖²/(β‖P‖) m).
+//! 1e4 m it moves the edge by under 1e-9 · β‖y‖²/(β‖P‖) m). The circle
+//! kept just above the threshold is itself only as good as f64 places it:
+//! centre and radius of size R = ‖P‖/ε round to ~1e-16 R, 1e-6 m at
+//! ε = 1e-8 and ‖P‖ = 50 m, more than the line's 1e-7 m at ε = 1e-9 for
+//! ‖y‖ = 100 m; the threshold is not raised, as the line's error grows
+//! with ‖y‖, which is not known here.
 
 use super::fleet::Vessel;
 use crate::geometry::arcs::Bound;

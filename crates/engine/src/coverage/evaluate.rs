@@ -11,11 +11,14 @@
 //! - a cell far from its vessel keeps its centroid even when its mass
 //!   underflows to 0 (see [`integrate`](super::integrate) on scaling).
 
+use super::cells::cells_with;
+use super::curved::{integrate_pieces, pieces_box};
 use super::density::RiskField;
 use super::fleet::Fleet;
 use super::gaussian::Gaussian;
 use super::integrate::{Tolerance, integrate};
-use super::partition::{CellGeometry, power_cells_with};
+use super::partition::CellGeometry;
+use crate::geometry::arcs::Piece;
 use crate::geometry::{Point, Region, bounds};
 
 /// Evaluation settings.
@@ -54,12 +57,12 @@ pub struct Evaluation {
 
 /// Evaluates the coverage of `fleet` over `region` under `risk`.
 pub fn evaluate(region: &Region, risk: &RiskField, fleet: &Fleet, options: &Options) -> Evaluation {
-    let geometries = power_cells_with(region, fleet, options.parallel);
+    let geometries = cells_with(region, fleet, options.parallel);
     let cells: Vec<CellResult> = super::map_each(
         geometries.into_iter().zip(fleet.vessels()).collect(),
         options.parallel && fleet.len() >= super::PARALLEL_MIN,
         |_, (geometry, vessel), near: &mut Vec<usize>| {
-            cell_figures(region, risk, vessel, fleet.beta(), geometry, options, near)
+            cell_figures(region, risk, vessel, geometry, options, near)
         },
     );
     let h = cells.iter().map(|c| c.mass).sum();
@@ -67,7 +70,7 @@ pub fn evaluate(region: &Region, risk: &RiskField, fleet: &Fleet, options: &Opti
 }
 
 /// One vessel's figures, from its geometry in the partition of the whole
-/// fleet ([`power_cells_with`]): [`evaluate`] is the partition and then this
+/// fleet ([`cells_with`]): [`evaluate`] is the partition and then this
 /// for every vessel, so a caller may compute the cells one by one, in any
 /// order and on any thread, with the same result. `near` is scratch space,
 /// reused from cell to cell.
@@ -75,15 +78,16 @@ pub fn cell_figures(
     region: &Region,
     risk: &RiskField,
     vessel: &super::Vessel,
-    beta: f64,
     geometry: CellGeometry,
     options: &Options,
     near: &mut Vec<usize>,
 ) -> CellResult {
     let p = vessel.position;
+    let beta = vessel.beta;
     let zero = Point { x: 0.0, y: 0.0 };
     let rings = local_rings(&geometry, p);
-    if rings.is_empty() {
+    let pieces = local_pieces(&geometry, p);
+    if rings.is_empty() && pieces.is_empty() {
         return CellResult {
             mass: 0.0,
             centroid: region.closest_point(p),
@@ -93,7 +97,12 @@ pub fn cell_figures(
         };
     }
     let area = geometry.area();
-    let (min, max) = world_bounds(&rings, p);
+    let local_box = pieces_box(&pieces);
+    let (min, max) = if pieces.is_empty() {
+        world_bounds(&rings, p)
+    } else {
+        (local_box.0 + p, local_box.1 + p)
+    };
 
     let ln_k = vessel.k.ln();
     let mut terms = Vec::new();
@@ -126,7 +135,11 @@ pub fn cell_figures(
             center: zero,
         });
     }
-    let r = integrate(&rings, &terms, tol);
+    let r = if pieces.is_empty() {
+        integrate(&rings, &terms, tol)
+    } else {
+        integrate_pieces(&pieces, local_box, &terms, tol)
+    };
     if !(r.mass > 0.0 && r.mass.is_finite()) {
         return CellResult {
             mass: 0.0,
@@ -156,6 +169,34 @@ fn local_rings(geometry: &CellGeometry, p: Point) -> Vec<Vec<Point>> {
         CellGeometry::Empty => Vec::new(),
         CellGeometry::Convex(c) => vec![shift(&c.vertices)],
         CellGeometry::Clipped { rings, .. } => rings.iter().map(|r| shift(r)).collect(),
+        CellGeometry::Curved { .. } => Vec::new(),
+    }
+}
+
+/// A curved cell's pieces relative to `p`; none for other cells.
+fn local_pieces(geometry: &CellGeometry, p: Point) -> Vec<Piece> {
+    match geometry {
+        CellGeometry::Curved { pieces } => pieces
+            .iter()
+            .map(|piece| match *piece {
+                Piece::Segment { from, to } => Piece::Segment {
+                    from: from - p,
+                    to: to - p,
+                },
+                Piece::Arc {
+                    centre,
+                    radius,
+                    start,
+                    sweep,
+                } => Piece::Arc {
+                    centre: centre - p,
+                    radius,
+                    start,
+                    sweep,
+                },
+            })
+            .collect(),
+        _ => Vec::new(),
     }
 }
 

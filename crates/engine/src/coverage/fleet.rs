@@ -2,10 +2,10 @@
 //! (SPEC §2, eq. 4).
 //!
 //! Invariant of a [`Fleet`]: at least one vessel, every k_i, β_i positive and
-//! finite, positions within range, and one common β. With a common β the
-//! partition f_i ≥ f_j is a power diagram with straight edges; different β
-//! would give curved (Apollonius-like) edges, which the engine does not handle,
-//! so they are rejected as unsupported rather than approximated.
+//! finite, positions within range. With a common β the partition f_i ≥ f_j
+//! is a power diagram with straight edges ([`partition`](super::partition));
+//! with different β an edge between two reaches is a circle
+//! ([`dominance`](super::dominance), [`mixed`](super::mixed)).
 
 use super::{InputError, check_range};
 use crate::geometry::Point;
@@ -38,11 +38,12 @@ impl Vessel {
     }
 }
 
-/// A validated, non-empty fleet with a common β.
+/// A validated, non-empty fleet.
 #[derive(Debug, Clone)]
 pub struct Fleet {
     vessels: Vec<Vessel>,
-    beta: f64,
+    /// β when every vessel has the same one (bit for bit).
+    common_beta: Option<f64>,
 }
 
 impl Fleet {
@@ -79,17 +80,11 @@ impl Fleet {
             check_range(|| f("beta"), v.beta, 0.0, false, MAX_BETA)?;
         }
         let beta = vessels[0].beta;
-        if let Some(i) = vessels.iter().position(|v| v.beta != beta) {
-            return Err(InputError::Unsupported {
-                field: format!("vessels[{i}].beta"),
-                reason: format!(
-                    "all vessels must share one beta (vessels[0] has {beta}, this one {}): \
-                     different beta give curved cell edges, which are not supported",
-                    vessels[i].beta
-                ),
-            });
-        }
-        Ok(Fleet { vessels, beta })
+        let common_beta = vessels.iter().all(|v| v.beta == beta).then_some(beta);
+        Ok(Fleet {
+            vessels,
+            common_beta,
+        })
     }
 
     pub fn vessels(&self) -> &[Vessel] {
@@ -104,8 +99,9 @@ impl Fleet {
         self.vessels.is_empty()
     }
 
-    /// The common β.
-    pub fn beta(&self) -> f64 {
-        self.beta
+    /// The β every vessel shares, or `None` in a fleet of different
+    /// reaches (curved cell edges).
+    pub fn common_beta(&self) -> Option<f64> {
+        self.common_beta
     }
 }

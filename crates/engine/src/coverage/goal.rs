@@ -49,7 +49,9 @@ pub fn reachable_goal(shore: &Shore, cell: &CellResult, p: Point, clearance: f64
         geometry => {
             let in_hull = match geometry {
                 CellGeometry::Convex(h) | CellGeometry::Clipped { hull: h, .. } => h.contains(p),
-                CellGeometry::Empty => false,
+                // A curved cell has no convex hull in which a straight
+                // line stays in one piece: always take its own piece.
+                CellGeometry::Empty | CellGeometry::Curved { .. } => false,
             };
             if in_hull && region.contains(c) && shore.segment_clear(p, c, 0.0) {
                 c

@@ -8,17 +8,25 @@
 //!   [`Fleet::new`] (and [`crate::geometry::Region::new`]); after that
 //!   [`evaluate()`] cannot fail: an empty cell is a result (mass 0, centroid the
 //!   nearest point of Q), never an error or a NaN;
-//! - cost grows as O(n log n) in the number of vessels (see [`partition`]).
+//! - cost grows as O(n log n) in the number of vessels (see [`partition`])
+//!   when β is common; with mixed β, as the vessels within each one's reach
+//!   (see [`mixed`]).
 //!
-//! Code map: [`density`] Φ; [`fleet`] f_i and the vessels; [`partition`] the
-//! cells; [`integrate`] the integrals of one cell, by [`boundary`] edge
-//! integrals (default) or adaptive triangle quadrature (reference);
+//! Code map: [`density`] Φ; [`fleet`] f_i and the vessels; [`cells`] the
+//! cells of any fleet: [`partition`] the power diagram (one β),
+//! [`dominance`] and [`mixed`] curved cells (several β); [`integrate`] the
+//! integrals of one straight-edged cell, by [`boundary`] edge integrals
+//! (default) or adaptive triangle quadrature (reference), [`curved`] those
+//! of a curved cell;
 //! [`evaluate`](mod@evaluate) ties them together; [`range`] is one vessel's
 //! range-limited cell in a peer fleet; [`goal`] turns a centroid
 //! into a goal a vessel can reach among islands.
 
 pub mod boundary;
+pub mod cells;
 pub mod curved;
+#[cfg(test)]
+mod curved_reference;
 pub mod density;
 pub mod dominance;
 pub mod evaluate;
@@ -26,6 +34,7 @@ pub mod fleet;
 pub mod gaussian;
 pub mod goal;
 pub mod integrate;
+pub mod mixed;
 pub mod partition;
 pub mod range;
 

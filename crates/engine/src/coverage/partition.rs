@@ -35,10 +35,11 @@ use rstar::RTree;
 use rstar::primitives::GeomWithData;
 
 use super::fleet::{Fleet, Vessel};
+use crate::geometry::arcs::Piece;
 #[cfg(test)]
 use crate::geometry::cross;
 use crate::geometry::{
-    ConvexPolygon, Point, Region, bounds, even_odd_contains, norm2, ring_signed_area,
+    ConvexPolygon, Point, Region, bounds, even_odd_contains, norm2, outline, ring_signed_area,
 };
 
 /// The region a vessel is responsible for.
@@ -58,6 +59,10 @@ pub enum CellGeometry {
         hull: ConvexPolygon,
         rings: Vec<Vec<Point>>,
     },
+    /// A cell of a fleet with different reaches β ([`mixed`](super::mixed)):
+    /// its oriented boundary of segments and arcs, in world coordinates,
+    /// not assembled into rings (holes and several pieces included).
+    Curved { pieces: Vec<Piece> },
 }
 
 impl CellGeometry {
@@ -72,6 +77,7 @@ impl CellGeometry {
             CellGeometry::Empty => false,
             CellGeometry::Convex(c) => c.contains(p),
             CellGeometry::Clipped { rings, .. } => even_odd_contains(rings, p),
+            CellGeometry::Curved { pieces } => outline::contains(pieces, p),
         }
     }
 
@@ -85,13 +91,27 @@ impl CellGeometry {
                 .map(|r| ring_signed_area(r))
                 .sum::<f64>()
                 .max(0.0),
+            CellGeometry::Curved { pieces } => {
+                let origin = pieces
+                    .first()
+                    .map_or(Point { x: 0.0, y: 0.0 }, |p| match *p {
+                        Piece::Segment { from, .. } => from,
+                        Piece::Arc { centre, .. } => centre,
+                    });
+                pieces
+                    .iter()
+                    .map(|p| p.area_share(origin))
+                    .sum::<f64>()
+                    .max(0.0)
+            }
         }
     }
 
     /// The cell as clean polygons (each piece with its holes), computed with
     /// `geo`'s boolean operations. For display and triangulation only: those
     /// snap to an integer grid, so their areas are exact to ~1e-9 relative,
-    /// while [`area`](Self::area) is exact.
+    /// while [`area`](Self::area) is exact. A curved cell's arcs become
+    /// chords within [`ARC_TOLERANCE`] of them.
     pub fn pieces(&self, region: &Region) -> MultiPolygon<f64> {
         let ring = |vs: &[Point]| {
             let mut r = vs.to_vec();
@@ -108,9 +128,16 @@ impl CellGeometry {
                     .filter(|piece| piece.unsigned_area() > 0.0)
                     .collect(),
             ),
+            CellGeometry::Curved { pieces } => {
+                outline::polygons(&outline::rings(pieces, ARC_TOLERANCE))
+            }
         }
     }
 }
+
+/// How far a curved cell's outline ([`CellGeometry::pieces`]) may be from
+/// its arcs, in metres.
+pub const ARC_TOLERANCE: f64 = 0.1;
 
 /// Computes every vessel's cell, in the fleet's order.
 pub fn power_cells(region: &Region, fleet: &Fleet) -> Vec<CellGeometry> {
@@ -118,17 +145,12 @@ pub fn power_cells(region: &Region, fleet: &Fleet) -> Vec<CellGeometry> {
 }
 
 /// [`power_cells`], on every core when `parallel` and the fleet is large
-/// enough to pay for it. Each cell depends only on the fleet, never on
+/// enough to pay for it. The fleet must have one β
+/// ([`cells_with`](super::cells::cells_with) takes any). Each cell depends only on the fleet, never on
 /// another cell, so the result is the same either way, bit for bit.
 pub fn power_cells_with(region: &Region, fleet: &Fleet, parallel: bool) -> Vec<CellGeometry> {
     let vessels = fleet.vessels();
-    let tree = RTree::bulk_load(
-        vessels
-            .iter()
-            .enumerate()
-            .map(|(i, v)| GeomWithData::new([v.position.x, v.position.y], i))
-            .collect(),
-    );
+    let tree = tree_of(vessels);
     let setup = Setup::new(region, fleet);
     // A first radius that holds every neighbour a typical cell needs (its
     // farthest vertex is ~0.6 mean spacings away, so neighbours beyond ~1.2
@@ -138,36 +160,8 @@ pub fn power_cells_with(region: &Region, fleet: &Fleet, parallel: bool) -> Vec<C
     let spacing = ((hi.x - lo.x) * (hi.y - lo.y) / vessels.len() as f64).sqrt();
     let first_radius = 2.5 * spacing;
     let cell_of = |i: usize, near: &mut Vec<(f64, usize)>| -> CellGeometry {
-        let p = vessels[i].position;
         let mut clipper = setup.clipper(i);
-        near.clear();
-        near.extend(
-            tree.locate_within_distance([p.x, p.y], first_radius * first_radius)
-                .filter(|nb| nb.data != i)
-                .map(|nb| (norm2(vessels[nb.data].position - p), nb.data)),
-        );
-        near.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        let mut alive = true;
-        for &(d2, j) in near.iter() {
-            if clipper.settled(d2.sqrt()) {
-                break;
-            }
-            alive = clipper.cut(j);
-            if !alive {
-                break;
-            }
-        }
-        if alive && !clipper.settled(first_radius) {
-            for (nb, d2) in tree.nearest_neighbor_iter_with_distance_2(&[p.x, p.y]) {
-                let j = nb.data;
-                if j == i || d2 <= first_radius * first_radius {
-                    continue; // itself, or already applied
-                }
-                if clipper.settled(d2.sqrt()) || !clipper.cut(j) {
-                    break;
-                }
-            }
-        }
+        cut_by_neighbours(&tree, vessels, i, first_radius, near, &mut clipper);
         clipper.finish(region)
     };
     super::map_indexed(
@@ -175,6 +169,70 @@ pub fn power_cells_with(region: &Region, fleet: &Fleet, parallel: bool) -> Vec<C
         parallel && vessels.len() >= super::PARALLEL_MIN,
         cell_of,
     )
+}
+
+/// The vessels by position, their index as data.
+pub(super) type Tree = RTree<GeomWithData<[f64; 2], usize>>;
+
+pub(super) fn tree_of(vessels: &[Vessel]) -> Tree {
+    RTree::bulk_load(
+        vessels
+            .iter()
+            .enumerate()
+            .map(|(i, v)| GeomWithData::new([v.position.x, v.position.y], i))
+            .collect(),
+    )
+}
+
+/// A cell being cut by the other vessels, nearest first.
+pub(super) trait Cutting {
+    /// Whether no vessel at distance ≥ `dist` can cut the cell any more.
+    fn settled(&self, dist: f64) -> bool;
+    /// Cuts by vessel `j`; false once the cell is empty.
+    fn cut(&mut self, j: usize) -> bool;
+}
+
+/// Cuts vessel `i`'s `cell` by the others, nearest first (ties by index),
+/// until it is settled or empty: those within `first_radius` from one
+/// range query, sorted in `near` (scratch), and beyond it, only when the
+/// cell is not settled there, the best-first iterator, which costs a heap
+/// operation per neighbour.
+pub(super) fn cut_by_neighbours(
+    tree: &Tree,
+    vessels: &[Vessel],
+    i: usize,
+    first_radius: f64,
+    near: &mut Vec<(f64, usize)>,
+    cell: &mut impl Cutting,
+) {
+    let p = vessels[i].position;
+    near.clear();
+    near.extend(
+        tree.locate_within_distance([p.x, p.y], first_radius * first_radius)
+            .filter(|nb| nb.data != i)
+            .map(|nb| (norm2(vessels[nb.data].position - p), nb.data)),
+    );
+    near.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    for &(d2, j) in near.iter() {
+        if cell.settled(d2.sqrt()) {
+            return;
+        }
+        if !cell.cut(j) {
+            return;
+        }
+    }
+    if cell.settled(first_radius) {
+        return;
+    }
+    for (nb, d2) in tree.nearest_neighbor_iter_with_distance_2(&[p.x, p.y]) {
+        let j = nb.data;
+        if j == i || d2 <= first_radius * first_radius {
+            continue; // itself, or already applied
+        }
+        if cell.settled(d2.sqrt()) || !cell.cut(j) {
+            return;
+        }
+    }
 }
 
 /// Vessel `i`'s cell alone: the same cell as `power_cells(region,
@@ -226,7 +284,9 @@ impl<'a> Setup<'a> {
             vessels,
             ln_k,
             ln_k_max,
-            beta: fleet.beta(),
+            beta: fleet
+                .common_beta()
+                .expect("the power diagram is for a fleet of one beta"),
             lo: Point {
                 x: rmin.x - margin,
                 y: rmin.y - margin,
@@ -261,7 +321,7 @@ struct Clipper<'s, 'a> {
     cell: ConvexPolygon,
 }
 
-impl Clipper<'_, '_> {
+impl Cutting for Clipper<'_, '_> {
     /// Clips by vessel j; false once the cell is empty.
     fn cut(&mut self, j: usize) -> bool {
         let s = self.setup;
@@ -284,7 +344,9 @@ impl Clipper<'_, '_> {
         let r2 = self.cell.max_distance2(Point { x: 0.0, y: 0.0 });
         dist >= r2.sqrt() + (r2 + 2.0 * self.w_i).sqrt()
     }
+}
 
+impl Clipper<'_, '_> {
     /// The cell in world coordinates, intersected with Q.
     fn finish(mut self, region: &Region) -> CellGeometry {
         if self.cell.is_empty() {

@@ -26,16 +26,16 @@
 //!
 //! ## Cost
 //! Selecting neighbours is one distance test per vessel heard; the cell
-//! is then [`power_cell`]: the relevant vessels (~140 at the paper's
+//! is then [`cell`] (the power diagram's when β is common): the relevant vessels (~140 at the paper's
 //! density) sorted by distance, the own cell clipped by the nearest until
 //! no farther one can cut it (~15), and its integrals. Bounded by the
 //! density, not the fleet (`cargo bench --bench peer`,
 //! docs/performance.md).
 
+use super::cells::cell;
 use super::density::RiskField;
 use super::evaluate::{CellResult, Options, cell_figures};
 use super::fleet::{Fleet, Vessel};
-use super::partition::power_cell;
 use crate::geometry::{Region, norm2};
 
 /// ε: the share of its peak below which an actuator's performance counts
@@ -67,8 +67,8 @@ pub fn relevant(own: &Vessel, other: &Vessel) -> bool {
 /// The range-limited cell of `own` among `others` (every vessel it hears;
 /// the irrelevant ones are left out here): its figures, computed exactly
 /// as [`evaluate`](super::evaluate()) computes a cell. `None` when the
-/// relevant vessels do not make a valid [`Fleet`] (different β: the
-/// engine's power diagram needs one).
+/// relevant vessels do not make a valid [`Fleet`] (a position or an
+/// actuator out of range).
 pub fn local_cell(
     region: &Region,
     risk: &RiskField,
@@ -79,16 +79,10 @@ pub fn local_cell(
     let mut vessels = vec![own];
     vessels.extend(others.into_iter().filter(|o| relevant(&own, o)));
     let fleet = Fleet::new(vessels).ok()?;
-    let geometry = power_cell(region, &fleet, 0);
+    let geometry = cell(region, &fleet, 0);
     let mut near = Vec::new();
     Some(cell_figures(
-        region,
-        risk,
-        &own,
-        fleet.beta(),
-        geometry,
-        options,
-        &mut near,
+        region, risk, &own, geometry, options, &mut near,
     ))
 }
 

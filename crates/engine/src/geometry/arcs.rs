@@ -10,17 +10,36 @@
 //! and inside every other bound, and those become pieces.
 //!
 //! Numerics: every intersection is solved on the curve's own parameter
-//! (a line's arc length, a circle's angle) from a quadratic or an arccos,
-//! so the pieces meet to rounding, not exactly; an integral over them is
-//! off by rounding times the boundary's length. A curve tangent to another
-//! bound touches it in a point and is kept or dropped as rounding decides:
-//! either way the measure is zero. Two equal bounds are one bound (they are
-//! deduplicated): otherwise each would keep its curve on the other's and
-//! count that boundary twice.
+//! (a line's arc length, a circle's angle), so the pieces meet to
+//! rounding, not exactly; an integral over them is off by rounding times
+//! the boundary's length. Near-equal reaches make circles of radius
+//! R ~ ‖P‖/ε (1e6 to 1e10 m) whose crossings with other curves are a tiny
+//! angle ℓ/R apart: there cos φ = v rounds to 1 and acos(v) amplifies its
+//! rounding by R/ℓ (or returns 0). So 1 − v and 1 + v are formed from
+//! their exact factorizations, products of differences of lengths
+//! (1 − v = (ρ + r − D)(ρ − r + D)/(2rD) for two circles, (r − h)/r for a
+//! line at signed distance h), each difference accurate to the rounding
+//! of the lengths, and φ = 2 asin √((1 − v)/2), which keeps the relative
+//! accuracy of a small φ; a line's crossing with a circle likewise takes
+//! |w|² − r² as (|w| − r)(|w| + r). An arc's area share is the triangle
+//! of its ends plus its circular segment ½R²(w − sin w) (a series for
+//! small w), not R² times a difference of cosines of nearby angles.
+//! What remains is the representation: a circle of radius R stored as
+//! f64 centre and radius, and its points evaluated as c + R u(θ), sit
+//! ~1e-16 R off the exact edge (measured: 1e-6 m at R = 4.8e9, 1e-7 m at
+//! 4.8e8), which no solving here can undo (curved_reference's
+//! near-equal test).
+//!
+//! A curve tangent to another bound touches it in a point and is kept or
+//! dropped as rounding decides: either way the measure is zero. Two equal
+//! bounds are one bound (they are deduplicated): otherwise each would keep
+//! its curve on the other's and count that boundary twice.
 //!
 //! Cost: O(m (m + e)) for m bounds and e region edges.
 
 use std::f64::consts::TAU;
+
+use smallvec::{SmallVec, smallvec};
 
 use super::{Point, Region, cross, dot, norm2, segment_distance2};
 
@@ -51,22 +70,22 @@ impl Bound {
                 let s = dot(normal, d);
                 let v = offset - dot(normal, o);
                 if s > 0.0 {
-                    vec![(f64::NEG_INFINITY, v / s)]
+                    smallvec![(f64::NEG_INFINITY, v / s)]
                 } else if s < 0.0 {
-                    vec![(v / s, f64::INFINITY)]
+                    smallvec![(v / s, f64::INFINITY)]
                 } else if v >= 0.0 {
-                    ALL_LINE.to_vec()
+                    Intervals::from_slice(&ALL_LINE)
                 } else {
-                    vec![]
+                    smallvec![]
                 }
             }
             Bound::Disc { centre, radius } => match line_circle(o, d, centre, radius) {
-                Some((t0, t1)) => vec![(t0, t1)],
-                None => vec![],
+                Some((t0, t1)) => smallvec![(t0, t1)],
+                None => smallvec![],
             },
             Bound::Outside { centre, radius } => match line_circle(o, d, centre, radius) {
-                Some((t0, t1)) => vec![(f64::NEG_INFINITY, t0), (t1, f64::INFINITY)],
-                None => ALL_LINE.to_vec(),
+                Some((t0, t1)) => smallvec![(f64::NEG_INFINITY, t0), (t1, f64::INFINITY)],
+                None => Intervals::from_slice(&ALL_LINE),
             },
         }
     }
@@ -75,16 +94,20 @@ impl Bound {
     fn on_circle(&self, c: Point, r: f64) -> Intervals {
         match *self {
             Bound::HalfPlane { normal, offset } => {
-                // n̂·(c + r u) ≤ offset/|n|  ⇔  cos(θ − α) ≤ κ.
+                // n̂·(c + r u) ≤ offset/|n|  ⇔  cos(θ − α) ≤ κ = h/r, h the
+                // signed distance from c to the line (kept side positive).
+                // 1 ∓ κ = (r ∓ h)/r: a difference of lengths, accurate
+                // where κ itself would round to ±1 (see the module doc).
                 let len = norm2(normal).sqrt();
-                let kappa = (offset / len - dot(normal, c) / len) / r;
-                let alpha = normal.y.atan2(normal.x);
-                if kappa >= 1.0 {
-                    ALL_CIRCLE.to_vec()
-                } else if kappa <= -1.0 {
-                    vec![]
+                let h = offset / len - dot(normal, c) / len;
+                let (below, above) = ((r - h) / r, (r + h) / r);
+                if below <= 0.0 {
+                    Intervals::from_slice(&ALL_CIRCLE)
+                } else if above <= 0.0 {
+                    smallvec![]
                 } else {
-                    let delta = kappa.acos();
+                    let alpha = normal.y.atan2(normal.x);
+                    let delta = acos_from(below, above);
                     angular(alpha + delta, alpha + TAU - delta)
                 }
             }
@@ -95,24 +118,53 @@ impl Bound {
                 if dist == 0.0 {
                     // Concentric: all or nothing.
                     return if (r <= radius) == inside || r == radius {
-                        ALL_CIRCLE.to_vec()
+                        Intervals::from_slice(&ALL_CIRCLE)
                     } else {
-                        vec![]
+                        smallvec![]
                     };
                 }
-                // |c + r u − centre|² ≤ radius²  ⇔  cos(θ − γ) ≥ v.
-                let v = (r * r + dist * dist - radius * radius) / (2.0 * r * dist);
-                let gamma = to.y.atan2(to.x);
-                match (inside, v) {
-                    (true, v) if v <= -1.0 => ALL_CIRCLE.to_vec(),
-                    (true, v) if v >= 1.0 => vec![],
-                    (true, v) => angular(gamma - v.acos(), gamma + v.acos()),
-                    (false, v) if v >= 1.0 => ALL_CIRCLE.to_vec(),
-                    (false, v) if v <= -1.0 => vec![],
-                    (false, v) => angular(gamma + v.acos(), gamma + TAU - v.acos()),
+                // |c + r u − centre|² ≤ radius²  ⇔  cos(θ − γ) ≥ v with
+                // v = (r² + D² − ρ²)/(2rD), from its exact factorizations
+                // 1 − v = (ρ + r − D)(ρ − r + D)/(2rD) and
+                // 1 + v = (r + D − ρ)(r + D + ρ)/(2rD) (see the module doc).
+                let two_rd = 2.0 * r * dist;
+                let below = sum_less(radius, r, dist) * sum_less(radius, dist, r) / two_rd;
+                let above = sum_less(r, dist, radius) * (r + dist + radius) / two_rd;
+                let gamma = || to.y.atan2(to.x);
+                match inside {
+                    true if above <= 0.0 => Intervals::from_slice(&ALL_CIRCLE),
+                    true if below <= 0.0 => smallvec![],
+                    true => {
+                        let (gamma, phi) = (gamma(), acos_from(below, above));
+                        angular(gamma - phi, gamma + phi)
+                    }
+                    false if below <= 0.0 => Intervals::from_slice(&ALL_CIRCLE),
+                    false if above <= 0.0 => smallvec![],
+                    false => {
+                        let (gamma, phi) = (gamma(), acos_from(below, above));
+                        angular(gamma + phi, gamma + TAU - phi)
+                    }
                 }
             }
         }
+    }
+}
+
+/// x + y − z (all ≥ 0) with the cancelling pair taken first: exact up to
+/// one rounding of the result when z is near x + y.
+fn sum_less(x: f64, y: f64, z: f64) -> f64 {
+    if x >= y { (x - z) + y } else { (y - z) + x }
+}
+
+/// acos v from 1 − v and 1 + v, each accurate to its own size: through
+/// asin of the half angle on the side where it is small, so a crossing
+/// angle of 1e-9 keeps its relative accuracy (acos of a v that rounds to
+/// 1 would give 0).
+fn acos_from(below: f64, above: f64) -> f64 {
+    if below <= above {
+        2.0 * (0.5 * below).min(1.0).sqrt().asin()
+    } else {
+        std::f64::consts::PI - 2.0 * (0.5 * above).min(1.0).sqrt().asin()
     }
 }
 
@@ -146,11 +198,7 @@ impl Piece {
                 sweep,
             } => {
                 let y = q - centre;
-                let (lo, span) = if sweep >= 0.0 {
-                    (start, sweep)
-                } else {
-                    (start + sweep, -sweep)
-                };
+                let (lo, span) = counter_clockwise(start, sweep);
                 let theta = y.y.atan2(y.x);
                 if (theta - lo).rem_euclid(TAU) <= span {
                     let d = norm2(y).sqrt() - radius;
@@ -169,6 +217,72 @@ impl Piece {
         }
     }
 
+    /// A box (low, high corners) holding the piece: a segment's ends, an
+    /// arc's ends and the points of its circle due east, north, west and
+    /// south that it passes, widened by rounding: a circle's points are
+    /// evaluated as c + R u(θ), off the stored ends by ~1e-16 (|c| + R).
+    pub fn bounding_box(&self) -> (Point, Point) {
+        match *self {
+            Piece::Segment { from, to } => (
+                Point {
+                    x: from.x.min(to.x),
+                    y: from.y.min(to.y),
+                },
+                Point {
+                    x: from.x.max(to.x),
+                    y: from.y.max(to.y),
+                },
+            ),
+            Piece::Arc {
+                centre,
+                radius,
+                start,
+                sweep,
+            } => {
+                let (lo, span) = counter_clockwise(start, sweep);
+                let at = |t: f64| {
+                    let (s, c) = t.sin_cos();
+                    centre + Point { x: c, y: s } * radius
+                };
+                let (a, b) = (at(lo), at(lo + span));
+                let (mut low, mut high) = (
+                    Point {
+                        x: a.x.min(b.x),
+                        y: a.y.min(b.y),
+                    },
+                    Point {
+                        x: a.x.max(b.x),
+                        y: a.y.max(b.y),
+                    },
+                );
+                for (k, axis) in [(1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0)]
+                    .into_iter()
+                    .enumerate()
+                {
+                    let theta = k as f64 * std::f64::consts::FRAC_PI_2;
+                    if (theta - lo).rem_euclid(TAU) <= span {
+                        let q = centre
+                            + Point {
+                                x: axis.0,
+                                y: axis.1,
+                            } * radius;
+                        low = Point {
+                            x: low.x.min(q.x),
+                            y: low.y.min(q.y),
+                        };
+                        high = Point {
+                            x: high.x.max(q.x),
+                            y: high.y.max(q.y),
+                        };
+                    }
+                }
+                let slack = 1e-12 * (centre.x.abs() + centre.y.abs() + radius) + 1e-9;
+                let pad = Point { x: slack, y: slack };
+                (low - pad, high + pad)
+            }
+        }
+    }
+
     /// ½ ∮ (x dy − y dx) along the piece, about `origin`: the piece's share
     /// of the area of the cell it bounds.
     pub fn area_share(&self, origin: Point) -> f64 {
@@ -180,17 +294,47 @@ impl Piece {
                 start,
                 sweep,
             } => {
+                // The triangle (origin, ends) and the circular segment
+                // between chord and arc: no term is larger than the
+                // result's own size, however large the radius.
                 let c = centre - origin;
-                let (s0, c0) = start.sin_cos();
-                let (s1, c1) = (start + sweep).sin_cos();
-                0.5 * (radius * radius * sweep + radius * (c.x * (s1 - s0) - c.y * (c1 - c0)))
+                let end = |t: f64| {
+                    let (s, co) = t.sin_cos();
+                    c + Point { x: co, y: s } * radius
+                };
+                let triangle = 0.5 * cross(end(start), end(start + sweep));
+                triangle + 0.5 * radius * radius * sweep_less_sin(sweep)
             }
         }
     }
 }
 
+/// An arc's angles as counter-clockwise from `lo` through `span` ≥ 0,
+/// whichever way it runs.
+pub fn counter_clockwise(start: f64, sweep: f64) -> (f64, f64) {
+    if sweep >= 0.0 {
+        (start, sweep)
+    } else {
+        (start + sweep, -sweep)
+    }
+}
+
+/// w − sin w without cancellation: its series for small |w|, where the
+/// first dropped term, w¹¹/11!, is below 1e-15 of w³/6.
+fn sweep_less_sin(w: f64) -> f64 {
+    if w.abs() < 0.1 {
+        let w2 = w * w;
+        w * w2 / 6.0 * (1.0 - w2 / 20.0 * (1.0 - w2 / 42.0 * (1.0 - w2 / 72.0)))
+    } else {
+        w - w.sin()
+    }
+}
+
 /// Sorted, disjoint, closed parameter intervals.
-type Intervals = Vec<(f64, f64)>;
+/// Inline: a curve's intervals are one or two almost always, and the
+/// partition builds tens of them per cell (heap allocations were a fifth
+/// of a mixed-β partition).
+type Intervals = SmallVec<[(f64, f64); 4]>;
 
 const ALL_LINE: [(f64, f64); 1] = [(f64::NEG_INFINITY, f64::INFINITY)];
 const ALL_CIRCLE: [(f64, f64); 1] = [(0.0, TAU)];
@@ -200,15 +344,15 @@ fn angular(s: f64, e: f64) -> Intervals {
     let s0 = s.rem_euclid(TAU);
     let e0 = s0 + (e - s);
     if e0 <= TAU {
-        vec![(s0, e0)]
+        smallvec![(s0, e0)]
     } else {
-        vec![(0.0, e0 - TAU), (s0, TAU)]
+        smallvec![(0.0, e0 - TAU), (s0, TAU)]
     }
 }
 
 fn intersect(a: &Intervals, b: &Intervals) -> Intervals {
     let (mut i, mut j) = (0, 0);
-    let mut out = Vec::new();
+    let mut out = Intervals::new();
     while i < a.len() && j < b.len() {
         let lo = a[i].0.max(b[j].0);
         let hi = a[i].1.min(b[j].1);
@@ -230,7 +374,9 @@ fn line_circle(o: Point, d: Point, c: Point, r: f64) -> Option<(f64, f64)> {
     let a = norm2(d);
     let w = o - c;
     let b = dot(w, d);
-    let cc = norm2(w) - r * r;
+    // |w|² − r² as a product: no cancellation for a huge circle.
+    let dw = norm2(w).sqrt();
+    let cc = (dw - r) * (dw + r);
     let disc = b * b - a * cc;
     if disc <= 0.0 {
         return None;
@@ -260,7 +406,7 @@ pub fn contains(region: &Region, bounds: &[Bound], q: Point) -> bool {
 /// The oriented boundary of the region cut by `bounds` (see the module
 /// doc).
 pub fn boundary(region: &Region, bounds: &[Bound]) -> Vec<Piece> {
-    let mut unique: Vec<Bound> = Vec::with_capacity(bounds.len());
+    let mut unique: SmallVec<[Bound; 16]> = SmallVec::new();
     for b in bounds {
         if !unique.contains(b) {
             unique.push(*b);
@@ -271,7 +417,7 @@ pub fn boundary(region: &Region, bounds: &[Bound]) -> Vec<Piece> {
     // The region's edges, inside every bound.
     for (a, b) in edges(region) {
         let d = b - a;
-        let mut keep = vec![(0.0, 1.0)];
+        let mut keep = smallvec![(0.0, 1.0)];
         for bound in bounds {
             keep = intersect(&keep, &bound.on_line(a, d));
             if keep.is_empty() {
@@ -299,9 +445,19 @@ pub fn boundary(region: &Region, bounds: &[Bound]) -> Vec<Piece> {
                     x: -normal.y,
                     y: normal.x,
                 } / len2.sqrt();
-                let mut keep = line_in_region(region, o, d);
+                // The other bounds first: most curves of a cell end empty
+                // against them, and then the region's crossings are never
+                // computed. (Intervals intersect by picking endpoints, so
+                // the order changes nothing in the result.)
+                let mut keep = Intervals::from_slice(&ALL_LINE);
                 for other in others {
                     keep = intersect(&keep, &other.on_line(o, d));
+                    if keep.is_empty() {
+                        break;
+                    }
+                }
+                if !keep.is_empty() {
+                    keep = intersect(&keep, &line_in_region(region, o, d));
                 }
                 pieces.extend(keep.into_iter().map(|(t0, t1)| Piece::Segment {
                     from: o + d * t0,
@@ -309,9 +465,15 @@ pub fn boundary(region: &Region, bounds: &[Bound]) -> Vec<Piece> {
                 }));
             }
             Bound::Disc { centre, radius } | Bound::Outside { centre, radius } => {
-                let mut keep = circle_in_region(region, centre, radius);
+                let mut keep = Intervals::from_slice(&ALL_CIRCLE);
                 for other in others {
                     keep = intersect(&keep, &other.on_circle(centre, radius));
+                    if keep.is_empty() {
+                        break;
+                    }
+                }
+                if !keep.is_empty() {
+                    keep = intersect(&keep, &circle_in_region(region, centre, radius));
                 }
                 let ccw = matches!(bound, Bound::Disc { .. });
                 pieces.extend(keep.into_iter().map(|(t0, t1)| Piece::Arc {
@@ -326,9 +488,12 @@ pub fn boundary(region: &Region, bounds: &[Bound]) -> Vec<Piece> {
     pieces
 }
 
+/// A curve's parameters where it crosses the region's edges.
+type Crossings = SmallVec<[f64; 16]>;
+
 /// The parameters of `o + t d` inside the region.
 fn line_in_region(region: &Region, o: Point, d: Point) -> Intervals {
-    let mut ts: Vec<f64> = Vec::new();
+    let mut ts: Crossings = SmallVec::new();
     for (a, b) in edges(region) {
         let e = b - a;
         let den = cross(d, e);
@@ -347,7 +512,7 @@ fn line_in_region(region: &Region, o: Point, d: Point) -> Intervals {
 
 /// The angles of the circle's points inside the region.
 fn circle_in_region(region: &Region, c: Point, r: f64) -> Intervals {
-    let mut ts: Vec<f64> = Vec::new();
+    let mut ts: Crossings = SmallVec::new();
     for (a, b) in edges(region) {
         let d = b - a;
         if let Some((t0, t1)) = line_circle(a, d, c, r) {
@@ -367,9 +532,9 @@ fn circle_in_region(region: &Region, c: Point, r: f64) -> Intervals {
     };
     if ts.is_empty() {
         return if region.contains(at(0.0)) {
-            ALL_CIRCLE.to_vec()
+            Intervals::from_slice(&ALL_CIRCLE)
         } else {
-            vec![]
+            smallvec![]
         };
     }
     ts.push(0.0);
@@ -379,10 +544,10 @@ fn circle_in_region(region: &Region, c: Point, r: f64) -> Intervals {
 
 /// The runs between consecutive crossing parameters `ts` (closed at ±∞
 /// for a line) whose middle is inside the region, merged.
-fn runs_inside(region: &Region, mut ts: Vec<f64>, at: impl Fn(f64) -> Point) -> Intervals {
+fn runs_inside(region: &Region, mut ts: Crossings, at: impl Fn(f64) -> Point) -> Intervals {
     ts.sort_by(f64::total_cmp);
     ts.dedup();
-    let mut out: Intervals = Vec::new();
+    let mut out = Intervals::new();
     for w in ts.windows(2) {
         let (t0, t1) = (w[0], w[1]);
         if t1 > t0 && region.contains(at(0.5 * (t0 + t1))) {

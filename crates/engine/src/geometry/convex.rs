@@ -36,12 +36,18 @@ impl ConvexPolygon {
     /// Vertices within a relative `1e-12` of the line count as on it, so a plane
     /// through an existing vertex does not create a sliver vertex next to it.
     pub fn clip(&mut self, normal: Point, offset: f64) {
-        let mut out = Vec::new();
-        match clip_ring_into(&self.vertices, normal, offset, &mut out) {
+        self.clip_with(normal, offset, &mut Vec::new());
+    }
+
+    /// [`clip`](Self::clip) with `scratch` for the new vertices (it takes
+    /// the old ones): no allocation once both have grown, for a caller
+    /// that clips many times.
+    pub fn clip_with(&mut self, normal: Point, offset: f64, scratch: &mut Vec<Point>) {
+        match clip_ring_into(&self.vertices, normal, offset, scratch) {
             Clipped::Unchanged => {}
             Clipped::Empty => self.vertices.clear(),
             Clipped::Cut => {
-                self.vertices = out;
+                std::mem::swap(&mut self.vertices, scratch);
                 if ring_signed_area(&self.vertices) <= 0.0 {
                     self.vertices.clear();
                 }

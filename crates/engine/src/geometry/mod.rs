@@ -17,6 +17,7 @@ pub mod arcs;
 pub mod convex;
 pub mod geodesy;
 pub mod grid;
+pub mod outline;
 pub mod quadrature;
 pub mod region;
 pub mod roadmap;
