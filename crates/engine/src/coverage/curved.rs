@@ -19,19 +19,25 @@
 //! (1e-6 m) at every node. Along an arc of radius R,
 //! θ ↦ r² = ‖c − m‖² + R² + 2R (c − m)·u(θ) is a trigonometric polynomial,
 //! so both integrands are analytic in θ and Gauss–Legendre in θ converges
-//! geometrically: an arc is cut into pieces of at most π/4 and of length at
-//! most 2/√a (the Gaussian's own scale) and 3/(a r) (its scale at distance
-//! r, where e^{−a r²} falls by e^{-6} over that length), and in the far
-//! form at most half the distance of the poles of e^{−a r²}/r² (see
-//! `arc`), 12 nodes each, the rule of the straight edges, whose error the
-//! engine's tests bound at 1e-10 relative. Against the finer rule used
-//! before 2026-11-26 (π/8, 2/(a r), the far form's pieces as long as r)
-//! the integrals agree to 4.5e-13 of their size (the tests below), and
-//! against the independent slab reference of `curved_reference` to 1.5e-12.
-//! Where e^{−a r²} < e^{−50} over a whole piece (r − L ≥
-//! √(50/a), L its length), the near form's integrals are closed: the angle
-//! the piece turns about m, over 2a, and −∫ n ds; the far form drops a
-//! piece whose e^{−a r²} is below e^{−50} of the cell's nearest point's.
+//! geometrically. With D = ‖c − m‖ and φ the angle from the circle's point
+//! nearest m, r² = r_min² + 2RD (1 − cos φ): the exponent a r² has the
+//! width 2/√(aRD) in φ at φ = 0 and changes by 6 over 3/(aRD |sin φ|),
+//! where D |sin φ| = |y·u⊥| is the distance of m's foot on the tangent,
+//! the straight edges' u. An arc is cut into pieces of at most π/4, that
+//! width and that decay angle, and in the far form at most half the
+//! distance of the poles of e^{−a r²}/r² (see `arc`), 12 nodes each: the
+//! straight edges' rule in the variable that matters, whose error the
+//! engine's tests bound at 1e-10 relative. Against a finer rule (2 instead
+//! of 3 decay lengths) the integrals agree to 3.2e-13 of their size (the
+//! tests), and against the independent slab reference of
+//! `curved_reference` to 1.5e-12. (Until 2026-11-26 pieces were at most
+//! 2/√a long and 3/(a r): since r ≥ D |sin φ|, far stricter where a
+//! narrow Gaussian sees a small circle from afar.)
+//! Where r² stays beyond the cutoff over a piece (`skip_angle` proposes
+//! how far, from the circle's geometry), the near form's integrals are
+//! closed: the angle the piece turns about m, over 2a, and −∫ n ds; the
+//! far form drops a piece whose e^{−a r²} is below e^{−50} of the cell's
+//! nearest point's.
 //! A term whose share is below the cut-off on the cell's bounding box is
 //! dropped before any exact distance is taken.
 
@@ -325,9 +331,11 @@ fn arc(c: Point, radius: f64, start: f64, sweep: f64, form: &Form) -> (f64, Poin
     // r² ≥ beyond (e^{−CUTOFF} of the cell's nearest point's share, or
     // of e^λ in the near form) is negligible.
     let beyond = near2 + CUTOFF / a;
+    let rd = radius * norm2(c).sqrt();
+    let width = max_angle.min(2.0 / (a * rd).sqrt());
     let circle = Circle {
         towards_m: Point { x: -c.x, y: -c.y },
-        four_rd: 4.0 * radius * norm2(c).sqrt(),
+        four_rd: 4.0 * rd,
         beyond,
         dir,
         max_angle,
@@ -336,10 +344,19 @@ fn arc(c: Point, radius: f64, start: f64, sweep: f64, form: &Form) -> (f64, Poin
     let (mut sp, mut cp) = (s0, c0);
     while done < total {
         let r0sq = norm2(y0);
-        let r0 = r0sq.sqrt();
-        let mut length = (2.0 / a.sqrt()).min(max_angle * radius);
-        if r0 > 0.0 {
-            length = length.min(decay / (a * r0));
+        // The exponent along the circle is a r_min² + 2aRD (1 − cos φ), φ
+        // from the point nearest m: pieces no wider than its width there,
+        // 2/√(aRD), and no longer than 3/(aRD |sin φ|), over which it
+        // changes by 6 — the straight edges' 2/√a and 3/(a u) with u the
+        // distance from the foot, since D |sin φ| = |y·u⊥| plays u's part.
+        // The rule before 2026-11-26, 2/(R√a) and 3/(a r R), was far
+        // stricter (r ≥ D |sin φ|) where a narrow Gaussian sees a small
+        // circle from afar: millions of pieces of 1e-12 rad (the floor)
+        // on one arc.
+        let mut step = width;
+        let along = (cp * y0.y - sp * y0.x).abs();
+        if along > 0.0 {
+            step = step.min(decay / (a * radius * along));
         }
         if far {
             // No longer than half the distance d of the poles of
@@ -349,9 +366,9 @@ fn arc(c: Point, radius: f64, start: f64, sweep: f64, form: &Form) -> (f64, Poin
             // along an arc, unlike along the straight edges' pieces,
             // which start at their nearest point). Pieces as long as d
             // were measured 5e-12 off.
-            length = length.min((0.5 * near2.sqrt()).max(r0 / 3.0));
+            step = step.min((0.5 * near2.sqrt()).max(r0sq.sqrt() / 3.0) / radius);
         }
-        let step = (length / radius).max(1e-12).min(total - done);
+        let step = step.max(1e-12).min(total - done);
         // Where the piece's start is beyond the cutoff, skip as far as the
         // whole piece stays beyond it, not in steps of the Gaussian's
         // width: a circle of a huge radius past a narrow Gaussian would

@@ -293,12 +293,14 @@ fn curved_cells_tile_the_region_and_match_an_independent_reference() {
 /// corner of a triangle of 10 000 km, and a Gaussian of σ = 1 mm 7 000 km
 /// away, 1 m inside the triangle's long edge. Its arc approaches the point
 /// nearest the Gaussian almost tangentially, where the former skip crept
-/// in steps ∝ angle² (hundreds of millions of them). Now a handful of
-/// skips and the few quadrature pieces that matter: both cells in well
-/// under a second (the fuzzer's limit is 10 s), the one holding the
-/// Gaussian with its whole mass π/a and centroid m, the other none.
+/// in steps ∝ angle² (hundreds of millions of them). And a disc of 50 m
+/// 100 km from the same Gaussian, whose former pieces of 3/(a r R) rad
+/// were 1e-12 rad along the 9e-6 rad that matter (seven million). Now a handful of skips
+/// and the few quadrature pieces that matter: every cell in well under a
+/// second (the fuzzer's limit is 10 s), the one holding the Gaussian with
+/// its whole mass π/a and centroid m, the others none.
 #[test]
-fn a_tangent_approach_to_a_far_narrow_gaussian_is_skipped() {
+fn a_narrow_gaussian_far_from_a_disc_takes_few_pieces() {
     let region = Region::new(
         vec![
             Point { x: 0.0, y: 0.0 },
@@ -308,17 +310,14 @@ fn a_tangent_approach_to_a_far_narrow_gaussian_is_skipped() {
         vec![],
     )
     .unwrap();
-    let fleet = [
-        Vessel {
-            position: Point { x: 1e7, y: 1e7 },
-            k: 1.0,
-            beta: 1e-4,
-        },
-        Vessel {
-            position: Point { x: 1.0, y: 0.0 },
-            k: 1.0,
-            beta: 1e-9,
-        },
+    let vessel = |x: f64, y: f64, beta: f64| Vessel {
+        position: Point { x, y },
+        k: 1.0,
+        beta,
+    };
+    let fleets = [
+        [vessel(1e7, 1e7, 1e-4), vessel(1.0, 0.0, 1e-9)],
+        [vessel(5.07e6, 7e4, 1.0), vessel(5.07e6 + 500.0, 7e4, 1e-2)],
     ];
     let g = Gaussian {
         log_weight: 0.0,
@@ -326,28 +325,31 @@ fn a_tangent_approach_to_a_far_narrow_gaussian_is_skipped() {
         center: Point { x: 5e6, y: 1.0 },
     };
     let started = std::time::Instant::now();
-    let cells = cells_of(&region, &fleet);
-    assert_eq!(cells.len(), 2);
-    for (vessel, _, pieces) in &cells {
-        let inside = outline::contains(pieces, g.center);
-        let [mass, mx, my] = curved_integrals(pieces, &g, is_far(pieces, &g, inside));
-        assert!(mass.is_finite() && mx.is_finite() && my.is_finite());
-        if vessel.beta == 1e-9 {
-            assert!(inside);
-            let whole = std::f64::consts::PI / g.a;
-            assert!(
-                (mass - whole).abs() <= 1e-12 * whole,
-                "{mass:e} vs {whole:e}"
-            );
-            let centroid = Point {
-                x: mx / mass,
-                y: my / mass,
-            };
-            assert!(norm2(centroid - g.center).sqrt() < 1e-6, "{centroid:?}");
-        } else {
-            assert!(!inside);
-            assert!(mass.abs() <= f64::MIN_POSITIVE, "{mass:e}");
+    for fleet in &fleets {
+        let cells = cells_of(&region, fleet);
+        assert_eq!(cells.len(), 2);
+        let mut holding = 0;
+        for (_, _, pieces) in &cells {
+            let inside = outline::contains(pieces, g.center);
+            let [mass, mx, my] = curved_integrals(pieces, &g, is_far(pieces, &g, inside));
+            assert!(mass.is_finite() && mx.is_finite() && my.is_finite());
+            if inside {
+                holding += 1;
+                let whole = PI / g.a;
+                assert!(
+                    (mass - whole).abs() <= 1e-12 * whole,
+                    "{mass:e} vs {whole:e}"
+                );
+                let centroid = Point {
+                    x: mx / mass,
+                    y: my / mass,
+                };
+                assert!(norm2(centroid - g.center).sqrt() < 1e-6, "{centroid:?}");
+            } else {
+                assert!(mass.abs() <= f64::MIN_POSITIVE, "{mass:e}");
+            }
         }
+        assert_eq!(holding, 1);
     }
     let took = started.elapsed().as_secs_f64();
     assert!(took < 1.0, "{took:.2} s");
