@@ -87,9 +87,9 @@ fn integrals_with(pieces: &[Piece], g: &Gaussian, far: bool, near2: f64) -> [f64
     integrals_rule(pieces, g, far, near2, (DECAY, MAX_ANGLE))
 }
 
-/// The integrals with arc pieces of at most `decay`/(a r) in the decaying
-/// part and at most `max_angle` (≤ MAX_ANGLE) radians: the tests compare
-/// the rule against a finer one.
+/// The integrals with arc pieces of at most `decay`/(aRD |sin φ|) radians
+/// in the decaying part (see the module doc) and at most `max_angle`
+/// (≤ MAX_ANGLE): the tests compare the rule against a finer one.
 fn integrals_rule(
     pieces: &[Piece],
     g: &Gaussian,

@@ -47,9 +47,9 @@ fn cells_of(region: &Region, fleet: &[Vessel]) -> Vec<(Vessel, Vec<Bound>, Vec<P
         .collect()
 }
 
-/// Arc pieces of 3/(a r) where the Gaussian decays (the straight
-/// edges' rule) against the former 2/(a r), which has about half
-/// again as many nodes there: on the cells of random mixed fleets in
+/// Arc pieces of π/4 and 3/(aRD |sin φ|) where the Gaussian decays (the
+/// straight edges' rule, module doc) against π/8 and 2/(aRD |sin φ|),
+/// which has about half again as many nodes there: on the cells of random mixed fleets in
 /// the square (with and without its island) and Gaussians of widths
 /// from 1 to 30 m inside, near and far from each cell, mass and first
 /// moments agree to 1e-12 of their size.
