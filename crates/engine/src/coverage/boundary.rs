@@ -331,7 +331,7 @@ pub(super) fn exp_m1_fast(x: f64) -> f64 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use rand::{RngExt, SeedableRng};
 
@@ -339,8 +339,9 @@ mod tests {
         Point { x, y }
     }
 
-    /// Distance in units of the last place of `b`.
-    fn ulps(a: f64, b: f64) -> f64 {
+    /// Distance in units of the last place of `b` (also the curved
+    /// quadrature's tests).
+    pub(in crate::coverage) fn ulps(a: f64, b: f64) -> f64 {
         let ulp = f64::from_bits(b.abs().to_bits() + 1) - b.abs();
         (a - b).abs() / ulp
     }

@@ -2,6 +2,7 @@
 
 use super::*;
 use crate::coverage::boundary::polygon_integrals;
+use crate::coverage::boundary::tests::ulps;
 use crate::coverage::dominance::cell_bounds;
 use crate::coverage::fleet::Vessel;
 use crate::geometry::Region;
@@ -16,10 +17,6 @@ use std::f64::consts::PI;
 /// the whole interval they are used on.
 #[test]
 fn small_sin_cos_is_within_two_ulp() {
-    let ulps = |a: f64, b: f64| {
-        let ulp = f64::from_bits(b.abs().to_bits() + 1) - b.abs();
-        (a - b).abs() / ulp
-    };
     let half = MAX_ANGLE / 2.0;
     assert_eq!(half, PI / 8.0);
     let mut ts: Vec<f64> = (0..=200_000)
