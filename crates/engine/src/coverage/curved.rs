@@ -368,17 +368,31 @@ fn arc(c: Point, radius: f64, start: f64, sweep: f64, form: &Form) -> (f64, Poin
             // were measured 5e-12 off.
             step = step.min((0.5 * near2.sqrt()).max(r0sq.sqrt() / 3.0) / radius);
         }
-        let step = step.max(1e-12).min(total - done);
+        // No piece shorter than 1e-12 of the distances at play: the start
+        // of the next one is carried by adding the chord to coordinates as
+        // large as r and R, and a chord below their resolution would leave
+        // r where it was (found by the fuzzer: a narrow Gaussian 5e6 m
+        // from an arc's corner, whose cutoff lies within 1e-8 m of it,
+        // took 1e-12 rad steps that r² never saw). The integrand then
+        // varies within a few ulp of the coordinates, where no rule can
+        // resolve it; elsewhere the rule's pieces are far longer.
+        let step = step
+            .max(1e-12 * (1.0 + r0sq.sqrt() / radius))
+            .min(total - done);
         // Where the piece's start is beyond the cutoff, skip as far as the
         // whole piece stays beyond it, not in steps of the Gaussian's
         // width: a circle of a huge radius past a narrow Gaussian would
         // otherwise take billions of steps (found by the fuzzer, twice).
-        let skip = if r0sq > beyond {
+        // A proposal that fails at its end is halved: where R and D are
+        // huge its arithmetic can cancel, and halving still approaches the
+        // cutoff geometrically.
+        let mut skip = if r0sq > beyond {
             skip_angle(y0, Point { x: cp, y: sp }, r0sq, &circle).min(total - done)
         } else {
             0.0
         };
-        if skip > step {
+        let mut skipped = false;
+        while skip > step {
             let (u1, p1) = at(dir * (done + skip));
             // The least r² over the skipped piece: at its end where r
             // falls (the skip stops at the nearest point), else at an end.
@@ -399,8 +413,13 @@ fn arc(c: Point, radius: f64, start: f64, sweep: f64, form: &Form) -> (f64, Poin
                 }
                 (y0, cp, sp) = (p1, u1.x, u1.y);
                 done += skip;
-                continue;
+                skipped = true;
+                break;
             }
+            skip *= 0.5;
+        }
+        if skipped {
+            continue;
         }
         // Each node from the piece's start by rotations: u(θ_p + δ/2) and
         // u(θ_p + δ) from one sin_cos(δ/2), the point the piece's start

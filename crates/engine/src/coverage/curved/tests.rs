@@ -292,7 +292,12 @@ fn curved_cells_tile_the_region_and_match_an_independent_reference() {
 /// nearest the Gaussian almost tangentially, where the former skip crept
 /// in steps ∝ angle² (hundreds of millions of them). And a disc of 50 m
 /// 100 km from the same Gaussian, whose former pieces of 3/(a r R) rad
-/// were 1e-12 rad along the 9e-6 rad that matter (seven million). Now a handful of skips
+/// were 1e-12 rad along the 9e-6 rad that matter (seven million). And
+/// the fuzzer's third and fourth (2026-11-26): a 32 km disc whose corner
+/// is nearest the Gaussian, 5e6 m away, where steps of 1e-12 rad moved
+/// the arc by less than its coordinates' resolution and r² never rose
+/// past the cutoff; and a disc whose nearest point lies by its arc's end, where
+/// the skip's proposal cancelled and fell back to 1e-12 rad steps. Now a handful of skips
 /// and the few quadrature pieces that matter: every cell in well under a
 /// second (the fuzzer's limit is 10 s), the one holding the Gaussian with
 /// its whole mass π/a and centroid m, the others none.
@@ -315,6 +320,8 @@ fn a_narrow_gaussian_far_from_a_disc_takes_few_pieces() {
     let fleets = [
         [vessel(1e7, 1e7, 1e-4), vessel(1.0, 0.0, 1e-9)],
         [vessel(5.07e6, 7e4, 1.0), vessel(5.07e6 + 500.0, 7e4, 1e-2)],
+        [vessel(1e7, 1e7, 1e-4), vessel(1.0, 0.0, 19.0)],
+        [vessel(1e7, 1.0, 1e-4), vessel(1.0, 0.0, 1e-9)],
     ];
     let g = Gaussian {
         log_weight: 0.0,
