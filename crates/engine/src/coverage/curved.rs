@@ -324,10 +324,6 @@ fn arc(c: Point, radius: f64, start: f64, sweep: f64, form: &Form) -> (f64, Poin
     let total = sweep.abs();
     let dir = sweep.signum();
     let mut done = 0.0;
-    // The piece's start and its direction u, carried from piece to piece
-    // by the same rotations as the nodes (from the arc's start again after
-    // a skip): no trigonometric call per piece. Over n pieces they drift
-    // by ~n ulp, far below the rule's error.
     // r² ≥ beyond (e^{−CUTOFF} of the cell's nearest point's share, or
     // of e^λ in the near form) is negligible.
     let beyond = near2 + CUTOFF / a;
@@ -340,10 +336,16 @@ fn arc(c: Point, radius: f64, start: f64, sweep: f64, form: &Form) -> (f64, Poin
         dir,
         max_angle,
     };
+    // The piece's start and its direction u, carried from piece to piece
+    // by the same rotations as the nodes (from the arc's start again after
+    // a skip): no trigonometric call per piece. Over n pieces they drift
+    // by ~n ulp, far below the rule's error, since no piece is shorter
+    // than 1e-12 of the coordinates (below).
     let mut y0 = y_start;
     let (mut sp, mut cp) = (s0, c0);
     while done < total {
         let r0sq = norm2(y0);
+        let r0 = r0sq.sqrt();
         // The exponent along the circle is a r_min² + 2aRD (1 − cos φ), φ
         // from the point nearest m: pieces no wider than its width there,
         // 2/√(aRD), and no longer than 3/(aRD |sin φ|), over which it
@@ -366,7 +368,7 @@ fn arc(c: Point, radius: f64, start: f64, sweep: f64, form: &Form) -> (f64, Poin
             // along an arc, unlike along the straight edges' pieces,
             // which start at their nearest point). Pieces as long as d
             // were measured 5e-12 off.
-            step = step.min((0.5 * near2.sqrt()).max(r0sq.sqrt() / 3.0) / radius);
+            step = step.min((0.5 * near2.sqrt()).max(r0 / 3.0) / radius);
         }
         // No piece shorter than 1e-12 of the distances at play: the start
         // of the next one is carried by adding the chord to coordinates as
@@ -375,9 +377,12 @@ fn arc(c: Point, radius: f64, start: f64, sweep: f64, form: &Form) -> (f64, Poin
         // from an arc's corner, whose cutoff lies within 1e-8 m of it,
         // took 1e-12 rad steps that r² never saw). The integrand then
         // varies within a few ulp of the coordinates, where no rule can
-        // resolve it; elsewhere the rule's pieces are far longer.
+        // resolve it; elsewhere the rule's pieces are far longer. Never
+        // past max_angle, where a tiny circle lies far from m (the
+        // fuzzer again).
         let step = step
-            .max(1e-12 * (1.0 + r0sq.sqrt() / radius))
+            .max(1e-12 * (1.0 + r0 / radius))
+            .min(max_angle)
             .min(total - done);
         // Where the piece's start is beyond the cutoff, skip as far as the
         // whole piece stays beyond it, not in steps of the Gaussian's

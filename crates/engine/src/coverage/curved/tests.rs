@@ -358,3 +358,57 @@ fn a_narrow_gaussian_far_from_a_disc_takes_few_pieces() {
     let took = started.elapsed().as_secs_f64();
     assert!(took < 1.0, "{took:.2} s");
 }
+
+/// The fuzzer's crash (2026-11-26): a vessel of β = 1.7e-100, whose
+/// actuator is flat, beside one of β = 0.001 and the same k, which wins
+/// a disc of radius 3e-47 m. That arc's pieces' floor, 1e-12 (1 + r/R)
+/// rad, passed π/4 (past the half-angle the nodes' sine polynomial is
+/// valid for, a debug assertion). The whole
+/// evaluation: finite figures, and the two cells tile the square.
+#[test]
+fn a_flat_actuator_beside_a_normal_one_evaluates() {
+    use crate::coverage::density::{RiskField, RiskObject};
+    use crate::coverage::evaluate::{Options, evaluate};
+    use crate::coverage::fleet::Fleet;
+    let region = Region::new(
+        vec![
+            Point { x: 0.0, y: 0.0 },
+            Point { x: 100.0, y: 0.0 },
+            Point { x: 100.0, y: 100.0 },
+            Point { x: 0.0, y: 100.0 },
+        ],
+        vec![],
+    )
+    .unwrap();
+    let risk = RiskField::new(
+        0.1,
+        vec![RiskObject {
+            center: Point { x: 25.0, y: 70.0 },
+            alpha: 10.0,
+            sigma: 10.0,
+        }],
+    )
+    .unwrap();
+    let fleet = Fleet::new(vec![
+        Vessel {
+            position: Point { x: 66.6, y: 10.4 },
+            k: 0.5,
+            beta: 1.692392065e-100,
+        },
+        Vessel {
+            position: Point { x: 30.0, y: 80.0 },
+            k: 0.5,
+            beta: 0.001,
+        },
+    ])
+    .unwrap();
+    let result = evaluate(&region, &risk, &fleet, &Options::default());
+    assert!(result.h.is_finite() && result.h > 0.0);
+    let area: f64 = result.cells.iter().map(|c| c.area).sum();
+    assert!((area - 1e4).abs() < 1e-9, "{area}");
+    for cell in &result.cells {
+        assert!(
+            cell.mass.is_finite() && cell.centroid.x.is_finite() && cell.centroid.y.is_finite()
+        );
+    }
+}
