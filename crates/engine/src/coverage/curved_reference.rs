@@ -413,6 +413,7 @@ mod tests {
     use crate::coverage::curved::{curved_integrals, is_far};
     use crate::coverage::dominance::cell_bounds;
     use crate::geometry::arcs::{Bound, Piece, boundary, contains};
+    use crate::geometry::outline::ends;
     use crate::geometry::region::fixtures::square;
     use proptest::prelude::*;
     use rand::{RngExt, SeedableRng};
@@ -491,21 +492,6 @@ mod tests {
 
     fn area(pieces: &[Piece]) -> f64 {
         pieces.iter().map(|p| p.area_share(MID)).sum()
-    }
-
-    fn ends(p: &Piece) -> (Point, Point) {
-        match *p {
-            Piece::Segment { from, to } => (from, to),
-            Piece::Arc {
-                centre,
-                radius,
-                start,
-                sweep,
-            } => {
-                let at = |t: f64| centre + pt(t.cos(), t.sin()) * radius;
-                (at(start), at(start + sweep))
-            }
-        }
     }
 
     /// The closed loops of a boundary, chained end to start (within 1e-6

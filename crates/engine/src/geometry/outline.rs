@@ -68,7 +68,8 @@ pub fn contains(pieces: &[Piece], q: Point) -> bool {
     inside
 }
 
-fn ends(piece: &Piece) -> (Point, Point) {
+/// A piece's start and end points (also the tests' loop chaining).
+pub(crate) fn ends(piece: &Piece) -> (Point, Point) {
     match *piece {
         Piece::Segment { from, to } => (from, to),
         Piece::Arc {
