@@ -7,11 +7,11 @@
 //!   mass / centroid / H(P), the vessel model, observer, controller,
 //!   guidance and safety layer; no async, no I/O, no serde, deterministic,
 //!   cannot fail on validated input;
-//! - [`protocol`]: the serde types of everything that crosses the wire or the
-//!   command line, and nothing else;
-//! - [`mission`]: the mission model and its changes, documents ⇄ core types
-//!   (scenarios, WGS84 documents), the mission clock and the built-in
-//!   scenarios; no I/O, its own errors;
+//! - [`protocol`], the [`seacover_protocol`] crate: the serde types of
+//!   everything that crosses the wire or the command line, and nothing else;
+//! - [`mission`], the [`seacover_mission`] crate: the mission model and its
+//!   changes, documents ⇄ core types (scenarios, WGS84 documents), the
+//!   mission clock and the built-in scenarios; no I/O, its own errors;
 //! - [`recorder`]: every run recorded as MCAP on a thread of its own, and
 //!   read back (replay, `seacover record`); nobody waits on its disk;
 //! - the shell: [`sim`] (the closed loop in one process), [`agent`]
@@ -27,10 +27,10 @@
 pub mod agent;
 pub mod demo;
 pub mod load;
-pub mod mission;
-pub mod protocol;
 pub mod recorder;
 pub mod server;
 pub mod sim;
 
 pub use seacover_engine::{control, coverage, geometry};
+pub use seacover_mission as mission;
+pub use seacover_protocol as protocol;

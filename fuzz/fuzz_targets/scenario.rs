@@ -6,8 +6,8 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use seacover::coverage::Options;
-use seacover::mission::scenario::evaluate_text;
+use seacover_engine::coverage::Options;
+use seacover_mission::scenario::evaluate_text;
 
 fuzz_target!(|data: &[u8]| {
     // Bounds the work per input: 64 KiB is a few hundred vessels or a ring

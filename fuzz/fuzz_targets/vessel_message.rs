@@ -6,8 +6,8 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use seacover::protocol::{CoordinatorMessage, VesselMessage};
-use seacover::mission::scenario::valid_id;
+use seacover_protocol::{CoordinatorMessage, VesselMessage};
+use seacover_mission::scenario::valid_id;
 
 fuzz_target!(|data: &[u8]| {
     // WebSocket text frames are UTF-8 and at most 64 KiB (ws::MAX_FRAME).

@@ -337,7 +337,8 @@ mod tests {
     /// is valid against the schema the channel carries.
     #[test]
     fn curved_cells_are_recorded_with_their_edges() {
-        let (_, doc) = crate::mission::scenario::fixtures::mixed_fleet();
+        let text = include_str!("../../examples/island-mixed.json");
+        let doc = crate::mission::scenario::evaluate_text(text, &Default::default()).unwrap();
         let record = CoverageRecord {
             tick: 1,
             time: 0.1,

@@ -1,7 +1,8 @@
 //! The architecture's invariants as tests (rust-analyzer's `tidy` tests are
 //! the model): the layers' one-way order, no import circles between files or
 //! between top-level modules, files of at most 800 lines, a `//!` doc on
-//! every source file, a core that does no I/O and a thin binary.
+//! every source file, a core that does no I/O, protocol and mission crates
+//! without the runtime, and a thin binary.
 //!
 //! The check reads the sources as text: every `crate::…`, `super::…` and
 //! `self::…` path (in `use` trees, expressions and doc links) and every path
@@ -39,6 +40,27 @@ const CORE_DEPENDENCIES: &[&str] = &[
     "thiserror",
 ];
 
+/// What the wire types may depend on: serde, the schema derives, GeoJSON.
+const PROTOCOL_DEPENDENCIES: &[&str] = &[
+    "geojson",
+    "schemars",
+    "seacover-engine",
+    "serde",
+    "serde_json",
+    "utoipa",
+];
+
+/// What the mission model may depend on: the layers below, geometry,
+/// GeoJSON and its own errors.
+const MISSION_DEPENDENCIES: &[&str] = &[
+    "geo",
+    "geojson",
+    "seacover-engine",
+    "seacover-protocol",
+    "serde_json",
+    "thiserror",
+];
+
 const MAX_LINES: usize = 800;
 const MAX_MAIN_LINES: usize = 250;
 
@@ -54,13 +76,63 @@ struct File {
     text: String,
 }
 
-/// The library's modules: `src/` with the engine's `crates/engine/src/`
-/// mounted at the root, as `src/lib.rs` re-exports it.
+/// The library's modules: `src/` with the lower layers' crates mounted where
+/// `src/lib.rs` re-exports them: the engine's `crates/engine/src/` at the
+/// root, `crates/protocol/src/` at `protocol` and `crates/mission/src/` at
+/// `mission`. A mounted crate's paths are read as the library's: its
+/// `crate::` as its mount point, a lower crate's name as that crate's.
 fn library() -> Vec<File> {
     let mut files = Vec::new();
     collect(&root().join("src"), &[], &mut files, true);
     collect(&root().join("crates/engine/src"), &[], &mut files, true);
+    for (krate, mount) in [("protocol", "protocol"), ("mission", "mission")] {
+        let mut mounted = Vec::new();
+        collect(
+            &root().join(format!("crates/{krate}/src")),
+            &[mount.to_string()],
+            &mut mounted,
+            true,
+        );
+        for f in &mut mounted {
+            f.text = as_mounted(&f.text, mount);
+        }
+        files.extend(mounted);
+    }
     files
+}
+
+/// A mounted crate's text with its paths as the library's.
+fn as_mounted(text: &str, mount: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    let mut rest = text;
+    while let Some(at) = rest.find(['c', 's']) {
+        let (before, from) = rest.split_at(at);
+        out.push_str(before);
+        // Only whole path segments: not `my_crate::`, `xseacover_engine::`.
+        let starts_word = !out
+            .chars()
+            .last()
+            .is_some_and(|c| c.is_alphanumeric() || c == '_');
+        let replaced = [
+            ("crate::", format!("crate::{mount}::")),
+            ("seacover_engine::", "crate::".to_string()),
+            ("seacover_protocol::", "crate::protocol::".to_string()),
+        ]
+        .into_iter()
+        .find(|(from_path, _)| starts_word && from.starts_with(from_path));
+        match replaced {
+            Some((from_path, to)) => {
+                out.push_str(&to);
+                rest = &from[from_path.len()..];
+            }
+            None => {
+                out.push_str(&from[..1]);
+                rest = &from[1..];
+            }
+        }
+    }
+    out.push_str(rest);
+    out
 }
 
 /// The binary's modules, as a crate of their own.
@@ -606,10 +678,12 @@ fn the_binary_is_thin() {
     }
 }
 
-#[test]
-fn the_core_does_no_io() {
-    let manifest = std::fs::read_to_string(root().join("crates/engine/Cargo.toml")).unwrap();
+/// The `[dependencies]` of a crate of the workspace (`crates/<name>`).
+fn dependencies(krate: &str) -> Vec<String> {
+    let path = root().join(format!("crates/{krate}/Cargo.toml"));
+    let manifest = std::fs::read_to_string(&path).unwrap();
     let mut section = "";
+    let mut names = Vec::new();
     for line in manifest.lines() {
         let line = line.trim();
         if line.starts_with('[') {
@@ -619,12 +693,38 @@ fn the_core_does_no_io() {
         if section == "[dependencies]"
             && let Some((name, _)) = line.split_once('=')
         {
-            let name = name.trim();
+            names.push(name.trim().to_string());
+        }
+    }
+    names
+}
+
+#[test]
+fn the_protocol_and_the_mission_have_no_runtime() {
+    // The layers between the core and the shell: serde and schemas, then
+    // documents ⇄ core types. No async, network or storage crate may come
+    // in below the recorder (the fuzz targets build on these crates alone).
+    for (krate, allowed) in [
+        ("protocol", PROTOCOL_DEPENDENCIES),
+        ("mission", MISSION_DEPENDENCIES),
+    ] {
+        for name in dependencies(krate) {
             assert!(
-                CORE_DEPENDENCIES.contains(&name),
-                "the core depends on {name}: only numerics and geometry may be below the protocol"
+                allowed.contains(&name.as_str()),
+                "crates/{krate} depends on {name}: the {krate} layer has no I/O and no runtime \
+                 (tests/it/architecture.rs lists what it may use)"
             );
         }
+    }
+}
+
+#[test]
+fn the_core_does_no_io() {
+    for name in dependencies("engine") {
+        assert!(
+            CORE_DEPENDENCIES.contains(&name.as_str()),
+            "the core depends on {name}: only numerics and geometry may be below the protocol"
+        );
     }
     let forbidden = [
         "std::fs",

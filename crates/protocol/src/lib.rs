@@ -628,7 +628,7 @@ pub struct SafetyDocument {
 
 impl Default for SafetyDocument {
     fn default() -> Self {
-        let d = crate::control::safety::SafetyParams::default();
+        let d = seacover_engine::control::safety::SafetyParams::default();
         SafetyDocument {
             filter: d.filter,
             safety_distance: d.safety_distance,
@@ -665,11 +665,11 @@ pub struct GuidanceDocument {
 }
 
 fn default_yaw_accel() -> f64 {
-    crate::control::guidance::GuidanceGains::default().yaw_accel
+    seacover_engine::control::guidance::GuidanceGains::default().yaw_accel
 }
 
 fn default_surge_accel() -> f64 {
-    crate::control::guidance::GuidanceGains::default().surge_accel
+    seacover_engine::control::guidance::GuidanceGains::default().surge_accel
 }
 
 /// One vessel as the coordinator sees it.

@@ -2,16 +2,16 @@
 //! local plane, on both sides of the engine. [`input`] places what clients
 //! give in WGS84 (GeoJSON regions, risk objects and vessels at `lat`,
 //! `lon`) in the plane; [`output`] draws a partition back as GeoJSON for
-//! GIS tools. The plane itself is [`crate::geometry::geodesy`].
+//! GIS tools. The plane itself is [`seacover_engine::geometry::geodesy`].
 //!
 //! Invariants:
 //! - everything stored, computed and streamed stays in the local plane:
 //!   conversion happens once, on the way in, and the stored documents are
-//!   the local ones ([`crate::protocol::RegionDocument`],
-//!   [`crate::protocol::RiskObjectDocument`]), so moving the origin moves
+//!   the local ones ([`seacover_protocol::RegionDocument`],
+//!   [`seacover_protocol::RiskObjectDocument`]), so moving the origin moves
 //!   nothing of the mission on the plane;
 //! - a geographic position is used only within
-//!   [`LocalFrame::RANGE`](crate::geometry::geodesy::LocalFrame::RANGE) of
+//!   [`LocalFrame::RANGE`](seacover_engine::geometry::geodesy::LocalFrame::RANGE) of
 //!   the origin, where the plane's distortion is documented; farther ones
 //!   are refused naming the field;
 //! - no I/O: documents in, documents out, like `mission::scenario`, which

@@ -5,18 +5,18 @@
 
 use super::MissionError;
 use super::scenario::ScenarioError;
-use crate::control::guidance::{GuidanceGains, GuidanceMode};
-use crate::control::safety::SafetyParams;
-use crate::coverage::RiskField;
-use crate::geometry::Point;
-use crate::protocol::{GuidanceDocument, OriginDocument, RiskDocument, SafetyDocument};
+use seacover_engine::control::guidance::{GuidanceGains, GuidanceMode};
+use seacover_engine::control::safety::SafetyParams;
+use seacover_engine::coverage::RiskField;
+use seacover_engine::geometry::Point;
+use seacover_protocol::{GuidanceDocument, OriginDocument, RiskDocument, SafetyDocument};
 
 /// The local plane of an origin, or `invalid` naming `origin.lat` or
 /// `origin.lon`.
 pub fn origin_frame(
     origin: OriginDocument,
-) -> Result<crate::geometry::geodesy::LocalFrame, MissionError> {
-    use crate::geometry::geodesy::{LatLon, LocalFrame};
+) -> Result<seacover_engine::geometry::geodesy::LocalFrame, MissionError> {
+    use seacover_engine::geometry::geodesy::{LatLon, LocalFrame};
     LocalFrame::new(LatLon {
         lat: origin.lat,
         lon: origin.lon,
@@ -30,7 +30,7 @@ pub fn risk_field(doc: &RiskDocument) -> Result<RiskField, MissionError> {
         doc.base,
         doc.objects
             .iter()
-            .map(|o| crate::coverage::RiskObject {
+            .map(|o| seacover_engine::coverage::RiskObject {
                 center: Point { x: o.x, y: o.y },
                 alpha: o.alpha,
                 sigma: o.sigma,

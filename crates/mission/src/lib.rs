@@ -1,5 +1,5 @@
 //! The mission model: what a fleet covers and how, between the wire types
-//! ([`crate::protocol`]) and the processes that run it (server, agents,
+//! ([`seacover_protocol`]) and the processes that run it (server, agents,
 //! simulator, recorder).
 //!
 //! Everything here is documents in, core types out (and back): no I/O, no
@@ -32,12 +32,12 @@ pub mod scenario;
 
 use std::sync::Arc;
 
-use crate::control::guidance::{GuidanceGains, GuidanceMode};
-use crate::control::safety::{SafetyLayer, SafetyParams};
-use crate::coverage::{Fleet, RiskField, Vessel};
-use crate::geometry::geodesy::LocalFrame;
-use crate::geometry::{Point, Region};
-use crate::protocol::{
+use seacover_engine::control::guidance::{GuidanceGains, GuidanceMode};
+use seacover_engine::control::safety::{SafetyLayer, SafetyParams};
+use seacover_engine::coverage::{Fleet, RiskField, Vessel};
+use seacover_engine::geometry::geodesy::LocalFrame;
+use seacover_engine::geometry::{Point, Region};
+use seacover_protocol::{
     ActuatorDocument, MissionDocument, OriginDocument, RegionDocument, RiskDocument,
     RiskObjectDocument,
 };
@@ -55,7 +55,7 @@ use scenario::{Scenario, ScenarioError};
 #[derive(Debug, Clone)]
 pub struct Mission {
     /// The WGS84 origin of the local plane, when geo-referenced; validated
-    /// ([`crate::geometry::geodesy::LocalFrame::new`]).
+    /// ([`seacover_engine::geometry::geodesy::LocalFrame::new`]).
     pub origin: Option<OriginDocument>,
     pub region_doc: RegionDocument,
     pub risk_doc: RiskDocument,
@@ -73,8 +73,8 @@ pub struct Mission {
 impl Mission {
     /// The paper's scenario (region, risk, actuator), default guidance, 10 Hz.
     pub fn paper() -> Mission {
-        let doc = crate::mission::scenario::parse_document(PAPER_SCENARIO)
-            .expect("built-in scenario parses");
+        let doc =
+            crate::scenario::parse_document(PAPER_SCENARIO).expect("built-in scenario parses");
         let scenario = Scenario::from_document(&doc).expect("built-in scenario is valid");
         let v = scenario.fleet.vessels()[0];
         let mut risk_doc = doc.risk.clone().expect("paper has risk");
@@ -106,7 +106,7 @@ impl Mission {
     /// validated as `evaluate` validates a scenario, plus the guidance gains
     /// and the tick rate.
     pub fn from_document(doc: &MissionDocument) -> Result<Mission, MissionError> {
-        let region = crate::mission::scenario::region_from_document(&doc.region)?;
+        let region = crate::scenario::region_from_document(&doc.region)?;
         let risk = risk_field(&doc.risk)?;
         // The actuator is checked as a scenario's vessel would be.
         Fleet::new(vec![Vessel {
@@ -123,7 +123,7 @@ impl Mission {
         let mut seen = std::collections::HashSet::new();
         for (i, o) in risk_doc.objects.iter_mut().enumerate() {
             let id = o.id.get_or_insert_with(|| format!("object-{}", i + 1));
-            if !crate::mission::scenario::valid_id(id) {
+            if !crate::scenario::valid_id(id) {
                 return Err(MissionError::Invalid(format!(
                     "risk.objects[{i}].id: must match [A-Za-z0-9_.-]{{1,64}}"
                 )));

@@ -2,11 +2,11 @@
 //! fresh install runs them without files.
 
 /// The paper's scenario (paper section 5), built in.
-pub const PAPER_SCENARIO: &str = include_str!("../../examples/paper.json");
+pub const PAPER_SCENARIO: &str = include_str!("../../../examples/paper.json");
 
 /// A harbour with three islands and a pier, 30 vessels, built in
 /// (`harbour-8` takes its first eight vessels).
-pub const HARBOUR_SCENARIO: &str = include_str!("../../examples/harbour.json");
+pub const HARBOUR_SCENARIO: &str = include_str!("../../../examples/harbour.json");
 
 /// Names of the built-in scenarios.
 pub const BUILT_IN: [&str; 3] = ["paper", "harbour-8", "harbour-30"];

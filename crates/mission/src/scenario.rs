@@ -1,5 +1,5 @@
 //! Scenario documents in, evaluation documents out: the shell between
-//! [`crate::protocol`] and the pure [`crate::coverage`] engine.
+//! [`seacover_protocol`] and the pure [`seacover_engine::coverage`] engine.
 //!
 //! Every rejection is a [`ScenarioError`] whose message starts with the path of
 //! the offending field (`vessels[2].k`, `region.holes[0]`), so a user can fix
@@ -9,13 +9,13 @@ use std::collections::HashSet;
 
 use geo::Area;
 
-use crate::coverage::fleet::{DEFAULT_BETA, DEFAULT_K};
-use crate::coverage::{
+use seacover_engine::coverage::fleet::{DEFAULT_BETA, DEFAULT_K};
+use seacover_engine::coverage::{
     CellGeometry, Evaluation, Fleet, InputError, Options, RiskField, RiskObject, Vessel, evaluate,
 };
-use crate::geometry::arcs::Piece;
-use crate::geometry::{Point, Region};
-use crate::protocol::{
+use seacover_engine::geometry::arcs::Piece;
+use seacover_engine::geometry::{Point, Region};
+use seacover_protocol::{
     CellDocument, EdgeDocument, ErrorDetail, ErrorDocument, EvaluationDocument, OriginDocument,
     RegionDocument, RiskDocument, ScenarioDocument, VesselDocument, XY,
 };
@@ -71,7 +71,7 @@ pub fn valid_id(id: &str) -> bool {
 }
 
 /// A scenario in the local plane: the document with whatever it gave in
-/// WGS84 placed in the plane of its origin (see [`crate::mission::georef::input`]).
+/// WGS84 placed in the plane of its origin (see [`crate::georef::input`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct LocalScenario {
     /// The origin of the plane the document was placed in (its own, or the
@@ -98,7 +98,7 @@ pub fn localize(
     doc: &ScenarioDocument,
     fallback: Option<OriginDocument>,
 ) -> Result<LocalScenario, ScenarioError> {
-    use crate::mission::georef::input;
+    use crate::georef::input;
     let origin = doc.origin.or(fallback);
     let frame = input::frame(origin)?;
     let frame = frame.as_ref();
@@ -247,7 +247,7 @@ fn ring_doc(ring: &geo::LineString<f64>) -> Vec<XY> {
 /// piece's outer ring), `pieces` (every piece with its holes, when it is
 /// not one simple polygon) and, for a cell with an arc, `edges` (its exact
 /// boundary). Arcs in `polygon` and `pieces` are chords within
-/// [`ARC_TOLERANCE`](crate::coverage::partition::ARC_TOLERANCE) of them,
+/// [`ARC_TOLERANCE`](seacover_engine::coverage::partition::ARC_TOLERANCE) of them,
 /// every vertex on the arc.
 pub fn cell_outline(
     region: &Region,
@@ -309,14 +309,14 @@ fn edge_document(piece: &Piece) -> EdgeDocument {
 }
 
 /// A curved cell's boundary chained into closed loops, as
-/// [`CellDocument::edges`](crate::protocol::CellDocument::edges) says, when
+/// [`CellDocument::edges`](seacover_protocol::CellDocument::edges) says, when
 /// it has an arc (nothing otherwise): the loops of
 /// `geometry::outline::loops`, which also make `polygon`, so the two agree.
 pub fn edge_loops(pieces: &[Piece]) -> Vec<Vec<EdgeDocument>> {
     if !pieces.iter().any(|p| matches!(p, Piece::Arc { .. })) {
         return Vec::new();
     }
-    crate::geometry::outline::loops(pieces)
+    seacover_engine::geometry::outline::loops(pieces)
         .iter()
         .map(|chain| chain.iter().map(edge_document).collect())
         .collect()
@@ -366,33 +366,15 @@ pub fn evaluate_text(text: &str, options: &Options) -> Result<EvaluationDocument
 /// Scenarios that tests elsewhere in the crate share.
 #[cfg(test)]
 pub(crate) mod fixtures {
-    use serde_json::json;
-
     use super::*;
-    use crate::coverage::Options;
+    use seacover_engine::coverage::Options;
 
-    /// The paper's square with an island, four vessels with β = 0.001 and
-    /// four with β = 0.004 (each of those wins a disc round itself).
+    /// `examples/island-mixed.json`: the paper's square with an island, four
+    /// vessels with β = 0.001 and four with β = 0.004 (each of those wins a
+    /// disc round itself).
     pub fn mixed_fleet() -> (Region, EvaluationDocument) {
-        let text = json!({
-            "region": {
-                "polygon": [[0, 0], [100, 0], [100, 100], [0, 100]],
-                "holes": [[[44, 44], [56, 44], [56, 56], [44, 56]]],
-            },
-            "risk": {"base": 0.1, "objects": [{"x": 25, "y": 70, "alpha": 10, "sigma": 10}]},
-            "vessels": [
-                {"id": "wide-1", "x": 20, "y": 20, "beta": 0.001},
-                {"id": "wide-2", "x": 80, "y": 20, "beta": 0.001},
-                {"id": "wide-3", "x": 80, "y": 80, "beta": 0.001},
-                {"id": "wide-4", "x": 20, "y": 80, "beta": 0.001},
-                {"id": "near-1", "x": 50, "y": 25, "beta": 0.004},
-                {"id": "near-2", "x": 75, "y": 50, "beta": 0.004},
-                {"id": "near-3", "x": 50, "y": 75, "beta": 0.004},
-                {"id": "near-4", "x": 25, "y": 50, "beta": 0.004},
-            ],
-        })
-        .to_string();
-        let scenario = Scenario::from_document(&parse_document(&text).unwrap()).unwrap();
+        let text = include_str!("../../../examples/island-mixed.json");
+        let scenario = Scenario::from_document(&parse_document(text).unwrap()).unwrap();
         let evaluation = scenario.evaluate(&Options::default());
         let doc = evaluation_document(&scenario.region, &scenario.ids, &evaluation);
         (scenario.region, doc)
@@ -403,7 +385,7 @@ pub(crate) mod fixtures {
 mod tests {
     use super::fixtures::mixed_fleet;
     use super::*;
-    use crate::coverage::Options;
+    use seacover_engine::coverage::Options;
 
     fn start_and_end(e: &EdgeDocument) -> (XY, XY) {
         match *e {

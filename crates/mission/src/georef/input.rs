@@ -8,16 +8,16 @@
 //! wrapping of exactly one polygon is accepted. Rings must be closed (the
 //! closing position is dropped, as our rings do not repeat it); their
 //! orientation is free (RFC 7946 asks parsers not to reject either, and
-//! [`crate::geometry::Region::new`] orients them). Errors name the JSON path
+//! [`seacover_engine::geometry::Region::new`] orients them). Errors name the JSON path
 //! of the position at fault (`region.features[0].geometry.coordinates[0][3]`);
 //! once converted, ring 0 is the region's `polygon` and ring i + 1 its
 //! `holes[i]`, the names the region's own validation uses.
 
 use geojson::{GeoJson, GeometryValue, PolygonType, Position};
 
-use crate::coverage::InputError;
-use crate::geometry::geodesy::{LatLon, LocalFrame};
-use crate::protocol::{
+use seacover_engine::coverage::InputError;
+use seacover_engine::geometry::geodesy::{LatLon, LocalFrame};
+use seacover_protocol::{
     GeoJsonRegion, OriginDocument, RegionDocument, RegionInput, RiskDocument, RiskInput,
     RiskObjectDocument, RiskObjectInput, VesselDocument, VesselInput, XY,
 };

@@ -5,10 +5,10 @@ use std::sync::Arc;
 
 use super::scenario::ScenarioError;
 use super::{Mission, MissionError, origin_frame, risk_field};
-use crate::control::safety::SafetyLayer;
-use crate::coverage::InputError;
-use crate::geometry::{Point, Region, norm2};
-use crate::protocol::{
+use seacover_engine::control::safety::SafetyLayer;
+use seacover_engine::coverage::InputError;
+use seacover_engine::geometry::{Point, Region, norm2};
+use seacover_protocol::{
     MissionDocument, OriginDocument, RegionInput, RiskDocument, RiskObjectDocument, RiskObjectInput,
 };
 
@@ -41,7 +41,8 @@ impl Mission {
     pub fn changed(&self, change: &MissionChange) -> Result<(Mission, ChangeResult), MissionError> {
         let mut next = self.clone();
         let frame = self.frame();
-        let placed = |e: crate::coverage::InputError| MissionError::from(ScenarioError::from(e));
+        let placed =
+            |e: seacover_engine::coverage::InputError| MissionError::from(ScenarioError::from(e));
         let result = match change {
             MissionChange::Origin(origin) => {
                 // The region and the objects keep their local coordinates:
@@ -51,9 +52,8 @@ impl Mission {
                 None
             }
             MissionChange::Region(input) => {
-                let doc =
-                    crate::mission::georef::input::region(input, frame.as_ref()).map_err(placed)?;
-                next.region = crate::mission::scenario::region_from_document(&doc)?;
+                let doc = crate::georef::input::region(input, frame.as_ref()).map_err(placed)?;
+                next.region = crate::scenario::region_from_document(&doc)?;
                 next.region_doc = doc;
                 next.layer = Arc::new(
                     SafetyLayer::new(&next.region, next.safety)
@@ -66,13 +66,12 @@ impl Mission {
                 None
             }
             MissionChange::AddObject(object) => {
-                let mut object =
-                    crate::mission::georef::input::risk_object(object, frame.as_ref(), "")
-                        .map_err(placed)?;
+                let mut object = crate::georef::input::risk_object(object, frame.as_ref(), "")
+                    .map_err(placed)?;
                 check_object(&object, &next.region)?;
                 let id = match &object.id {
                     Some(id) => {
-                        if !crate::mission::scenario::valid_id(id) {
+                        if !crate::scenario::valid_id(id) {
                             return Err(MissionError::Invalid(
                                 "id: must match [A-Za-z0-9_.-]{1,64}".into(),
                             ));
@@ -105,7 +104,7 @@ impl Mission {
                 Some(object)
             }
             MissionChange::PutObject(id, object) => {
-                let object = crate::mission::georef::input::risk_object(object, frame.as_ref(), "")
+                let object = crate::georef::input::risk_object(object, frame.as_ref(), "")
                     .map_err(placed)?;
                 check_object(&object, &next.region)?;
                 let slot = next

@@ -15,7 +15,7 @@
 //! GeoJSON has no arcs: a curved cell (vessels with different β) is its
 //! `polygon` and `pieces`, whose vertices lie on the arcs densely enough
 //! that every point of an arc is within 0.1 m of the chords
-//! ([`cell_outline`](crate::mission::scenario::cell_outline)); its exact
+//! ([`cell_outline`](crate::scenario::cell_outline)); its exact
 //! `edges` stay in the local documents.
 //!
 //! A cell is a `Polygon`, or a `MultiPolygon` when it has several pieces;
@@ -31,9 +31,9 @@ use geo::{Coord, LineString, MultiPolygon, Polygon};
 use geojson::{Feature, FeatureCollection, Geometry, GeometryValue, JsonObject};
 use serde_json::{Value, json};
 
-use crate::control::ned::heading_to_ned;
-use crate::geometry::geodesy::LocalFrame;
-use crate::protocol::{CellDocument, RegionDocument, VesselStatusDocument, XY};
+use seacover_engine::control::ned::heading_to_ned;
+use seacover_engine::geometry::geodesy::LocalFrame;
+use seacover_protocol::{CellDocument, RegionDocument, VesselStatusDocument, XY};
 
 /// `[lon, lat]` of a local point.
 fn lon_lat(frame: &LocalFrame, [x, y]: XY) -> [f64; 2] {
@@ -147,11 +147,11 @@ pub fn coverage(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::Point;
-    use crate::geometry::arcs::Piece;
-    use crate::geometry::geodesy::LatLon;
-    use crate::mission::scenario::fixtures::mixed_fleet;
-    use crate::protocol::EdgeDocument;
+    use crate::scenario::fixtures::mixed_fleet;
+    use seacover_engine::geometry::Point;
+    use seacover_engine::geometry::arcs::Piece;
+    use seacover_engine::geometry::geodesy::LatLon;
+    use seacover_protocol::EdgeDocument;
 
     fn piece(edge: &EdgeDocument) -> Piece {
         let p = |[x, y]: XY| Point { x, y };
