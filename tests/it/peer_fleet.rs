@@ -106,7 +106,7 @@ fn a_no_coordinator_eight_vessels_reach_the_centralized_optimum() {
 /// evaluate` from where it is); healed, E_max < 0.5 m and H within 0.5 % of
 /// the centralized run's; never two vessels within the safety distance.
 #[test]
-#[ignore = "falls short (issue 30 note): the halves reach their own optima (ratio 1.0000) and heal, but the two halves' optima are the same four points (usv-2 and usv-8 0.72 m apart), so the safety check fails (closest 0.63 m); a product decision is needed; run with --ignored"]
+#[ignore = "falls short (issue 30 note, docs/peer.md): the halves reach their own optima (ratio 1.0000) and heal, but two points of one half's optimum are 0.9 m and 6.0 m from the other's (usv-2 and usv-8 ended 0.72 m apart), so the safety check fails (closest 0.63 m); only a placement both halves plan alike would pass both (scripts/partition-offsets: 99.5 % at 8.5 m apart); run with --ignored"]
 fn c_partition_four_four_and_heal() {
     let test = "peer_fleet c";
     let Some(python) = skip(test) else { return };
