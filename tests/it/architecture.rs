@@ -101,38 +101,14 @@ fn library() -> Vec<File> {
     files
 }
 
-/// A mounted crate's text with its paths as the library's.
+/// A mounted crate's text with its paths as the library's. In this order:
+/// the crate's own `crate::` moves to its mount point before a lower crate's
+/// name becomes `crate::`. (Neither crate has `$crate` or an identifier
+/// ending in these names.)
 fn as_mounted(text: &str, mount: &str) -> String {
-    let mut out = String::with_capacity(text.len());
-    let mut rest = text;
-    while let Some(at) = rest.find(['c', 's']) {
-        let (before, from) = rest.split_at(at);
-        out.push_str(before);
-        // Only whole path segments: not `my_crate::`, `xseacover_engine::`.
-        let starts_word = !out
-            .chars()
-            .last()
-            .is_some_and(|c| c.is_alphanumeric() || c == '_');
-        let replaced = [
-            ("crate::", format!("crate::{mount}::")),
-            ("seacover_engine::", "crate::".to_string()),
-            ("seacover_protocol::", "crate::protocol::".to_string()),
-        ]
-        .into_iter()
-        .find(|(from_path, _)| starts_word && from.starts_with(from_path));
-        match replaced {
-            Some((from_path, to)) => {
-                out.push_str(&to);
-                rest = &from[from_path.len()..];
-            }
-            None => {
-                out.push_str(&from[..1]);
-                rest = &from[1..];
-            }
-        }
-    }
-    out.push_str(rest);
-    out
+    text.replace("crate::", &format!("crate::{mount}::"))
+        .replace("seacover_engine::", "crate::")
+        .replace("seacover_protocol::", "crate::protocol::")
 }
 
 /// The binary's modules, as a crate of their own.
