@@ -363,7 +363,8 @@ pub fn evaluate_text(text: &str, options: &Options) -> Result<EvaluationDocument
     ))
 }
 
-/// Scenarios that tests elsewhere in the crate share.
+/// Scenarios, and what reads their documents back, that tests elsewhere in
+/// the crate share.
 #[cfg(test)]
 pub(crate) mod fixtures {
     use super::*;
@@ -379,11 +380,33 @@ pub(crate) mod fixtures {
         let doc = evaluation_document(&scenario.region, &scenario.ids, &evaluation);
         (scenario.region, doc)
     }
+
+    /// An edge of a cell document as the core's piece.
+    pub fn piece(edge: &EdgeDocument) -> Piece {
+        let p = |[x, y]: XY| Point { x, y };
+        match *edge {
+            EdgeDocument::Segment { from, to } => Piece::Segment {
+                from: p(from),
+                to: p(to),
+            },
+            EdgeDocument::Arc {
+                centre,
+                radius,
+                start,
+                sweep,
+            } => Piece::Arc {
+                centre: p(centre),
+                radius,
+                start,
+                sweep,
+            },
+        }
+    }
 }
 
 #[cfg(test)]
 mod tests {
-    use super::fixtures::mixed_fleet;
+    use super::fixtures::{mixed_fleet, piece};
     use super::*;
     use seacover_engine::coverage::Options;
 
@@ -423,30 +446,7 @@ mod tests {
                         "{}",
                         cell.id
                     );
-                    let piece = match *e {
-                        EdgeDocument::Segment { from, to } => Piece::Segment {
-                            from: Point {
-                                x: from[0],
-                                y: from[1],
-                            },
-                            to: Point { x: to[0], y: to[1] },
-                        },
-                        EdgeDocument::Arc {
-                            centre,
-                            radius,
-                            start,
-                            sweep,
-                        } => Piece::Arc {
-                            centre: Point {
-                                x: centre[0],
-                                y: centre[1],
-                            },
-                            radius,
-                            start,
-                            sweep,
-                        },
-                    };
-                    area += piece.area_share(Point { x: 50.0, y: 50.0 });
+                    area += piece(e).area_share(Point { x: 50.0, y: 50.0 });
                 }
             }
             assert!(

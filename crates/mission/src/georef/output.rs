@@ -147,32 +147,10 @@ pub fn coverage(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scenario::fixtures::mixed_fleet;
+    use crate::scenario::fixtures::{mixed_fleet, piece};
     use seacover_engine::geometry::Point;
     use seacover_engine::geometry::arcs::Piece;
     use seacover_engine::geometry::geodesy::LatLon;
-    use seacover_protocol::EdgeDocument;
-
-    fn piece(edge: &EdgeDocument) -> Piece {
-        let p = |[x, y]: XY| Point { x, y };
-        match *edge {
-            EdgeDocument::Segment { from, to } => Piece::Segment {
-                from: p(from),
-                to: p(to),
-            },
-            EdgeDocument::Arc {
-                centre,
-                radius,
-                start,
-                sweep,
-            } => Piece::Arc {
-                centre: p(centre),
-                radius,
-                start,
-                sweep,
-            },
-        }
-    }
 
     fn segment_distance(q: Point, a: Point, b: Point) -> f64 {
         Piece::Segment { from: a, to: b }.distance2(q).sqrt()
