@@ -12,6 +12,7 @@
 //! Parts: [`wire`] (encoding and value rules), [`credentials`] (Zenoh's
 //! user/password authentication for a fleet), [`table`] (neighbours, ages,
 //! refusals), [`board`] (mission revisions), [`step`] (the loop on board),
+//! [`split`] (the plan both sides of a partition follow),
 //! [`session`] (Zenoh's configuration from the command line), [`node`]
 //! (the Zenoh declarations and the tasks).
 //!
@@ -28,6 +29,7 @@ mod error;
 mod index;
 pub mod node;
 pub mod session;
+pub mod split;
 pub mod step;
 pub mod table;
 pub mod wire;

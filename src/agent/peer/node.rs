@@ -20,6 +20,7 @@ use zenoh::qos::CongestionControl;
 use zenoh::query::ConsolidationMode;
 
 use super::board::{Board, Revision};
+use super::split::{Change, Split, Tick};
 use super::table::Table;
 use super::wire::{self, Keys};
 use super::{PeerConfig, PeerError};
@@ -379,6 +380,8 @@ struct Declared {
     controlled: bool,
     /// The hull cannot go astern: its guidance is ahead only.
     ahead_only: bool,
+    /// The plan it follows while the fleet is split.
+    split: Split,
 }
 
 impl Declared {
@@ -421,6 +424,7 @@ impl Declared {
             partition: 0,
             controlled: false,
             ahead_only: false,
+            split: Split::default(),
         })
     }
 
@@ -478,18 +482,34 @@ impl Declared {
             self.controlled = false;
             return None;
         };
-        let neighbours = shared.table.lock().expect("table lock").neighbours_near(
+        let ageing = &shared.config.ageing;
+        let mut neighbours = shared.table.lock().expect("table lock").neighbours_near(
             &self.id,
             (own.x, own.y),
             super::step::relevance(&rev.mission, actuator),
             Instant::now(),
-            &shared.config.ageing,
+            ageing,
         );
+        let (orders, change) = self.split.update(&Tick {
+            mission: &rev.mission,
+            revision: rev.revision,
+            me: &self.id,
+            own,
+            actuator,
+            neighbours: &neighbours,
+            ageing,
+            t,
+        });
+        log_split(&self.id, t, &change);
+        if let Some(o) = &orders {
+            neighbours.retain(|n| !o.others.iter().any(|(id, _)| *id == n.beacon.id));
+        }
         let step = super::step::step(
             &rev.mission,
             own,
             actuator,
             &neighbours,
+            orders.as_ref(),
             g,
             t,
             self.ticks,
@@ -578,6 +598,26 @@ async fn run_vessel(
     }
     tracing::info!(vessel = %vessel.id, "peer vessel left");
     Ok(())
+}
+
+/// What a vessel's log says of its split plan.
+fn log_split(id: &str, t: f64, change: &Change) {
+    match change {
+        Change::None => {}
+        Change::Started {
+            others,
+            closest,
+            duration,
+        } => tracing::info!(
+            vessel = %id, t, ?others, closest, duration,
+            "fleet split: following the plan both groups compute"
+        ),
+        Change::Refused { others, closest } => tracing::warn!(
+            vessel = %id, t, ?others, closest,
+            "fleet split: the plan's way is not clear, keeping clear of the silent vessels instead"
+        ),
+        Change::Ended { why } => tracing::info!(vessel = %id, t, why, "fleet split: plan ended"),
+    }
 }
 
 fn status_document(

@@ -8,16 +8,19 @@
 //! water is taken over); every neighbour not yet forgotten is in the
 //! safety filter's traffic, a silent one with its uncertainty radius and
 //! not trusted to keep its half of a gap; a neighbour with another β than
-//! this vessel's bounds its cell by a circle (the engine's curved cells).
-//! Pure: no I/O, no clock.
+//! this vessel's bounds its cell by a circle (the engine's curved cells);
+//! while the fleet is split and a plan is followed ([`split`](super::split)),
+//! the vessel steers to its planned place instead of its centroid and the
+//! other group is traffic where the plan has it. Pure: no I/O, no clock.
 
+use super::split::Orders;
 use super::table::Neighbour;
 use crate::control::Vec3;
 use crate::control::barrier::{Margin, Scratch};
 use crate::control::guidance::Guidance;
 use crate::control::model::State;
 use crate::coverage::range::{interaction_distance, local_cell, reach};
-use crate::coverage::{CellResult, Options, Vessel};
+use crate::coverage::{CellGeometry, CellResult, Options, Vessel};
 use crate::geometry::Point;
 use crate::mission::Mission;
 use crate::protocol::CommandDocument;
@@ -78,13 +81,16 @@ pub fn relevance(mission: &Mission, actuator: (f64, f64)) -> impl Fn(f64, f64) -
 }
 
 /// One tick: `own` is this vessel's state and actuator (k, β as the wire
-/// carries them), `t` its mission time, `tick` the command's number.
+/// carries them), `t` its mission time, `tick` the command's number;
+/// `orders` a split's plan's (the other group then left out of
+/// `neighbours`).
 #[allow(clippy::too_many_arguments)]
 pub fn step(
     mission: &Mission,
     own: &State,
     actuator: (f64, f64),
     neighbours: &[Neighbour],
+    orders: Option<&Orders>,
     guidance: &mut Guidance,
     t: f64,
     tick: u64,
@@ -113,23 +119,44 @@ pub fn step(
     let cell = local_cell(&mission.region, &mission.risk, me, fresh, &options)
         .or_else(|| local_cell(&mission.region, &mission.risk, me, [], &options))
         .expect("a lone vessel of a valid mission is a valid fleet");
-    let mut states = Vec::with_capacity(neighbours.len() + 1);
+    let planned = orders.map_or(&[][..], |o| &o.others[..]);
+    let mut states = Vec::with_capacity(neighbours.len() + planned.len() + 1);
     states.push(*own);
     states.extend(neighbours.iter().map(state_of));
+    states.extend(planned.iter().map(|(_, s)| *s));
     let template = Guidance::new(mission.guidance);
     let gains = vec![&template; states.len()];
     let layer = &mission.layer;
     let tick_inputs = layer.prepare_with(t, &states, &gains, |i| match i {
         0 => Margin::KNOWN,
-        i => match neighbours[i - 1].silent {
+        i if i <= neighbours.len() => match neighbours[i - 1].silent {
             None => Margin::KNOWN,
             Some(s) => Margin {
                 radius: s.radius,
                 reciprocal: false,
             },
         },
+        _ => Margin {
+            radius: orders.map_or(0.0, |o| o.radius),
+            reciprocal: false,
+        },
     });
-    let safe = layer.command(&tick_inputs, 0, own, &cell, guidance, scratch);
+    // A plan's place is a goal of its own: no cell to keep it in.
+    let goal = orders.map(|o| CellResult {
+        mass: cell.mass,
+        centroid: o.target,
+        area: cell.area,
+        gradient: cell.gradient,
+        geometry: CellGeometry::Empty,
+    });
+    let safe = layer.command(
+        &tick_inputs,
+        0,
+        own,
+        goal.as_ref().unwrap_or(&cell),
+        guidance,
+        scratch,
+    );
     let (cmd, c) = (safe.command, cell.centroid);
     Step {
         command: CommandDocument {

@@ -147,7 +147,7 @@ impl Fleet {
                 })
                 .args(["--time-warp", &self.warp.to_string()])
                 .args(&self.vessel_args)
-                .env("RUST_LOG", "warn")
+                .env("RUST_LOG", "warn,seacover::agent::peer::node=info")
                 .stdin(Stdio::null())
                 .stdout(Stdio::null())
                 .stderr(std::fs::File::create(&log).unwrap());
@@ -553,14 +553,16 @@ impl Fleet {
             .iter()
             .filter_map(|v| {
                 let text = std::fs::read_to_string(&v.log).unwrap_or_default();
-                let lines: Vec<&str> = text.lines().collect();
+                // The peer node's INFO lines (joins, split plans) are kept
+                // for SEACOVER_PEER_KEEP; the digest is of the rest.
+                let lines: Vec<&str> = text.lines().filter(|l| !l.contains(" INFO ")).collect();
                 (!lines.is_empty())
                     .then(|| format!("{}: {} log lines, first: {}", v.id, lines.len(), lines[0]))
             })
             .collect();
         if !digest.is_empty() {
             eprintln!(
-                "{}: vessel logs (RUST_LOG=warn):\n  {}",
+                "{}: vessel logs (warnings and errors):\n  {}",
                 self.name,
                 digest.join("\n  ")
             );

@@ -9,7 +9,8 @@
 //!
 //! Code map: [`model`] parameters, presets and RK4 dynamics; [`disturbance`]
 //! τ_d(t); [`observer`] eq. 30; [`controller`] eq. 33–35; [`guidance`]
-//! eq. 10–13 and the converging `course` mode; [`lloyd`] the single-integrator
+//! eq. 10–13 and the converging `course` mode, [`lag`] how far it trails a
+//! moving goal; [`lloyd`] the single-integrator
 //! baseline; [`safety`] the tick's safe motion among islands and vessels
 //! (goal, route, [`barrier`] filter over [`halfplanes`], tracking).
 
@@ -18,6 +19,7 @@ pub mod controller;
 pub mod disturbance;
 pub mod guidance;
 pub mod halfplanes;
+pub mod lag;
 pub mod lloyd;
 pub mod model;
 pub mod ned;

@@ -19,7 +19,8 @@
 //! (default) or adaptive triangle quadrature (reference), [`curved`] those
 //! of a curved cell;
 //! [`evaluate`](mod@evaluate) ties them together; [`range`] is one vessel's
-//! range-limited cell in a peer fleet; [`goal`] turns a centroid
+//! range-limited cell in a peer fleet, [`split`] the plan of a peer fleet
+//! split in two groups; [`goal`] turns a centroid
 //! into a goal a vessel can reach among islands.
 
 pub mod boundary;
@@ -37,6 +38,7 @@ pub mod integrate;
 pub mod mixed;
 pub mod partition;
 pub mod range;
+pub mod split;
 
 pub use density::{RiskField, RiskObject};
 pub use evaluate::{CellResult, Evaluation, Options, evaluate};
