@@ -987,6 +987,7 @@ fn the_peer_wire_schema_accepts_the_real_documents() {
             heard: [("usv-2".to_string(), 0.13), ("usv-9".to_string(), 4.2)].into(),
             refused: [("oversized".to_string(), 1)].into(),
             received: 1523,
+            split: revision.map(|_| vec!["usv-5".to_string(), "usv-6".to_string()]),
         })
         .unwrap()
     };

@@ -200,6 +200,7 @@ fn c_partition_four_four_and_heal() {
     let mut split_in = BTreeMap::new();
     let mut wrong_after = BTreeMap::new();
     let mut healed_in = BTreeMap::new();
+    let mut planned_in = BTreeMap::new();
     for half in &halves {
         for &i in half {
             let id = format!("usv-{i}");
@@ -226,6 +227,19 @@ fn c_partition_four_four_and_heal() {
             split_in.insert(
                 id.clone(),
                 first.map(|k| (during[k]["recv"].as_f64().unwrap() - t_split) * WARP),
+            );
+            // Whether it said it follows a split's plan against the other
+            // half (its status's `split`), and from when.
+            let others: Vec<Value> = (1..=N)
+                .filter(|j| !half.contains(j))
+                .map(|j| Value::from(format!("usv-{j}")))
+                .collect();
+            let planned = during
+                .iter()
+                .find(|s| s["status"]["split"].as_array() == Some(&others));
+            planned_in.insert(
+                id.clone(),
+                planned.map(|s| (s["recv"].as_f64().unwrap() - t_split) * WARP),
             );
             // The statuses off the half after the first on it: how many, and
             // (for the report) the partitions they showed and when.
@@ -273,7 +287,8 @@ fn c_partition_four_four_and_heal() {
     eprintln!(
         "SUMMARY {test}: time warp {WARP}, UDP links; joint after {joint} s: H {h_joint:.1} \
          (E_max {:.2} m); split 4 | 4 at {m_split:.0} s: partition down to the half after \
-         (mission s, per vessel) {split_in:.1?} (worst {worst_split:.1} s, bound {}), statuses \
+         (mission s, per vessel) {split_in:.1?} (worst {worst_split:.1} s, bound {}), following \
+         the split's plan against the other half after {planned_in:.1?} s, statuses \
          off the half afterwards (wrong, of) {wrong_after:?}; after {split} s split: {} ({optima_text}); healed at \
          {m_heal:.0} s: the whole fleet in every partition again after {rejoined:.1?} s (first \
          status with all 7, per vessel: {healed_in:.1?} s); {healed} s after that: H {h_end:.1} \
@@ -290,6 +305,13 @@ fn c_partition_four_four_and_heal() {
             "within stale_after + 2 s = {} s of mission time every vessel's status shows only its \
              half (3 neighbours, only its half fresh): worst {worst_split:.1} s ({split_in:.1?})",
             STALE_AFTER + 2.0
+        ),
+    );
+    checks.check(
+        planned_in.values().all(Option::is_some),
+        format!(
+            "every vessel follows the split's plan against the other half (its status's \
+             `split`): after {planned_in:.1?} s"
         ),
     );
     checks.check(

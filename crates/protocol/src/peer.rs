@@ -86,4 +86,8 @@ pub struct PeerStatusDocument {
     pub refused: BTreeMap<String, u64>,
     /// Beacons it received in all.
     pub received: u64,
+    /// While it follows a split's plan (the fleet cut in two, docs/peer.md
+    /// "What each loss does"): the other group's ids; `null` otherwise.
+    #[serde(default)]
+    pub split: Option<Vec<String>>,
 }

@@ -452,6 +452,7 @@ impl Declared {
             &self.current,
             self.controlled,
             self.partition,
+            &self.split,
         );
         let json = serde_json::to_vec(&doc).expect("documents serialize");
         let _ = query.reply(shared.keys.status(&self.id), json).await;
@@ -626,6 +627,7 @@ fn status_document(
     current: &Option<Arc<Revision>>,
     controlled: bool,
     partition: usize,
+    split: &Split,
 ) -> PeerStatusDocument {
     let table = shared.table.lock().expect("table lock");
     let mut heard = table.ages(Instant::now(), &shared.config.ageing);
@@ -638,5 +640,6 @@ fn status_document(
         heard,
         refused: table.refused(),
         received: table.received(),
+        split: split.others(),
     }
 }

@@ -143,6 +143,11 @@ impl Split {
         self.active.is_some()
     }
 
+    /// The other group's ids while a plan is followed.
+    pub fn others(&self) -> Option<Vec<String>> {
+        self.active.as_ref().map(|a| a.ids[1 - a.me.0].clone())
+    }
+
     /// Looks at this tick: starts, keeps or ends a plan, and gives the
     /// tick's orders while one is followed.
     pub fn update(&mut self, tick: &Tick<'_>) -> (Option<Orders>, Change) {
