@@ -36,7 +36,9 @@
 //! falls silent (the groups are no longer what both sides planned with),
 //! or when the mission's revision changes. A plan whose way would bring two
 //! vessels of different groups closer than the separation or than they
-//! were at the start is not followed (today's rule then applies).
+//! were at the start, or a hull nearer the shore than the safety layer
+//! lets it go (an island in the way), is not followed (today's rule then
+//! applies).
 //!
 //! Pure: the mission time comes in, nothing goes out but the plan's
 //! orders.
@@ -102,7 +104,8 @@ pub enum Change {
         closest: f64,
         duration: f64,
     },
-    /// Groups that fell silent together, but the plan's way was not clear.
+    /// Groups that fell silent together, but the plan's ways were not clear
+    /// of each other or of the shore (`closest`: between the groups).
     Refused {
         others: Vec<String>,
         closest: f64,
@@ -249,7 +252,17 @@ impl Split {
         let at_start = closest_between(&plan.start);
         let closest = plan.closest();
         let other_ids: Vec<String> = theirs.iter().map(|(id, _)| id.clone()).collect();
-        if closest < params.separation.min(at_start) - 1e-6 {
+        // A way across an island, or nearer the shore than the filter lets
+        // a hull go, would be left by the hull: no plan either.
+        let barrier = mission.safety.barrier();
+        let shore = mission.layer.shore();
+        let ashore = (0..2).any(|g| {
+            plan.start[g]
+                .iter()
+                .zip(&plan.end[g])
+                .any(|(a, b)| !shore.segment_clear(*a, *b, barrier.shore_distance))
+        });
+        if ashore || closest < params.separation.min(at_start) - 1e-6 {
             self.refused.clone_from(&other_ids);
             return Change::Refused {
                 others: other_ids,
@@ -499,6 +512,32 @@ mod tests {
                 assert!(norm2(p - q).sqrt() >= 9.0 - 1e-6);
             }
         }
+    }
+
+    /// An island across the way a vessel would have to take: the plan is
+    /// refused (once per silence), and today's rule stays.
+    #[test]
+    fn an_island_in_the_way_refuses_the_plan() {
+        let mut doc = Mission::paper().document();
+        doc.region.holes = vec![vec![[38.0, 64.0], [46.0, 64.0], [46.0, 80.0], [38.0, 80.0]]];
+        let mission = Mission::from_document(&doc).expect("a valid mission");
+        let ageing = Ageing::default();
+        let first = ageing.stale_after + TOGETHER + 0.05;
+        let mut split = Split::default();
+        let at = own(1);
+        let neighbours = seen(1, &[5, 6, 7, 8], first);
+        let (orders, change) =
+            split.update(&tick(&mission, &ageing, "usv-1", &at, &neighbours, 10.0));
+        assert_eq!(orders, None);
+        // Refused for the island: the ways keep clear of each other.
+        let Change::Refused { closest, .. } = change else {
+            panic!("{change:?}");
+        };
+        assert!(closest >= 9.0 - 1e-6, "{closest}");
+        // The same silence on the next tick: not planned for again.
+        let (orders, change) =
+            split.update(&tick(&mission, &ageing, "usv-1", &at, &neighbours, 10.1));
+        assert_eq!((orders, change), (None, Change::None));
     }
 
     /// One silent neighbour is a dead boat, not a group: no plan; nor when
