@@ -249,7 +249,6 @@ impl Split {
         ) else {
             return Change::None;
         };
-        let at_start = closest_between(&plan.start);
         let closest = plan.closest();
         let other_ids: Vec<String> = theirs.iter().map(|(id, _)| id.clone()).collect();
         // A way across an island, or nearer the shore than the filter lets
@@ -262,7 +261,7 @@ impl Split {
                 .zip(&plan.end[g])
                 .any(|(a, b)| !shore.segment_clear(*a, *b, barrier.shore_distance))
         });
-        if ashore || closest < params.separation.min(at_start) - 1e-6 {
+        if ashore || !plan.clear {
             self.refused.clone_from(&other_ids);
             return Change::Refused {
                 others: other_ids,
@@ -347,14 +346,6 @@ fn orders(active: &Active, t: f64) -> Orders {
         others,
         radius: SLACK,
     }
-}
-
-/// The least distance between vessels of different groups among `points`.
-fn closest_between(points: &[Vec<Point>; 2]) -> f64 {
-    points[0]
-        .iter()
-        .flat_map(|a| points[1].iter().map(move |b| norm2(*a - *b).sqrt()))
-        .fold(f64::INFINITY, f64::min)
 }
 
 #[cfg(test)]

@@ -37,9 +37,9 @@
 //!    moving or waiting (and, for two vessels that start or end closer than
 //!    that, no closer than they start or end). [`SplitPlan::closest`] is the
 //!    least distance between vessels of different groups on the way; where
-//!    no delay up to [`SplitParams::waits`] clears a vessel it leaves
-//!    without one, and the caller, seeing the separation broken, does not
-//!    follow the plan.
+//!    no delay up to [`SplitParams::waits`] clears a vessel (after it has
+//!    been moved to the front of the order once) the plan is not
+//!    [`SplitPlan::clear`], and the caller does not follow it.
 //!
 //! Pure and deterministic; it cannot fail once the inputs are valid (a
 //! vessel that Lloyd's iteration would carry out of the region is kept at
@@ -98,6 +98,10 @@ pub struct SplitPlan {
     pub speed: f64,
     /// Seconds from the start until every vessel is at its end.
     pub duration: f64,
+    /// Whether every pair keeps, all the way, the separation (or, for two
+    /// vessels that start or end nearer, no less than that): a plan that
+    /// is not clear is not to be followed.
+    pub clear: bool,
 }
 
 /// One vessel's way: waits at `a` until `leave`, moves at constant
@@ -216,7 +220,7 @@ pub fn plan(
     let start = groups.map(|g| g.iter().map(|v| v.position).collect::<Vec<_>>());
     let mut end = optimum.clone();
     push_apart(region, &start, &mut end, params);
-    let delay = schedule(&start, &end, params);
+    let (delay, clear) = schedule(&start, &end, params);
     let duration = (0..2)
         .flat_map(|g| (0..start[g].len()).map(move |i| (g, i)))
         .map(|(g, i)| Way::new(start[g][i], end[g][i], delay[g][i], params.speed).arrive)
@@ -228,11 +232,17 @@ pub fn plan(
         delay,
         speed: params.speed,
         duration,
+        clear,
     })
 }
 
-/// Step 3 of the module doc: each vessel's delay.
-fn schedule(start: &[Vec<Point>; 2], end: &[Vec<Point>; 2], params: &SplitParams) -> [Vec<f64>; 2] {
+/// Step 3 of the module doc: each vessel's delay, and whether they clear
+/// every pair.
+fn schedule(
+    start: &[Vec<Point>; 2],
+    end: &[Vec<Point>; 2],
+    params: &SplitParams,
+) -> ([Vec<f64>; 2], bool) {
     let mut order: Vec<(usize, usize)> = (0..2)
         .flat_map(|g| (0..start[g].len()).map(move |i| (g, i)))
         .collect();
@@ -246,7 +256,7 @@ fn schedule(start: &[Vec<Point>; 2], end: &[Vec<Point>; 2], params: &SplitParams
     for _ in 0..=order.len() {
         let (failed, delay) = delays(&order, start, end, params);
         let Some(k) = failed else {
-            return delay;
+            return (delay, true);
         };
         if best.as_ref().is_none_or(|(placed, _)| k > *placed) {
             best = Some((k, delay));
@@ -254,7 +264,8 @@ fn schedule(start: &[Vec<Point>; 2], end: &[Vec<Point>; 2], params: &SplitParams
         let stuck = order.remove(k);
         order.insert(0, stuck);
     }
-    best.map(|(_, d)| d).expect("one round at least")
+    let (_, delay) = best.expect("one round at least");
+    (delay, false)
 }
 
 /// Delays in `order`; the place in `order` of the first vessel no delay
@@ -461,6 +472,7 @@ mod tests {
                 }
             }
         }
+        assert!(plan.clear);
         assert!(sampled >= 9.0 - 1e-6, "{sampled}");
         assert!(plan.closest() >= 9.0 - 1e-6, "{}", plan.closest());
         assert!(plan.closest() <= sampled + 1e-9);
@@ -497,14 +509,15 @@ mod tests {
             vec![Point { x: 20.0, y: 52.0 }],
         ];
         let params = SplitParams::both(9.0, 1.0);
-        let delay = schedule(&start, &end, &params);
+        let (delay, clear) = schedule(&start, &end, &params);
         let (u, v) = (
             Way::new(start[0][0], end[0][0], delay[0][0], 1.0),
             Way::new(start[1][0], end[1][0], delay[1][0], 1.0),
         );
         // Both go straight through each other's water: no delay clears
-        // that (each ends on the other's way), so this pair is refused.
+        // that (each ends on the other's way), and the plan says so.
         assert!(least_between(&u, &v) < 9.0);
+        assert!(!clear);
         // Crossing at right angles: the second waits for the first.
         let start = [
             vec![Point { x: 10.0, y: 50.0 }],
@@ -514,11 +527,12 @@ mod tests {
             vec![Point { x: 90.0, y: 50.0 }],
             vec![Point { x: 50.0, y: 90.0 }],
         ];
-        let delay = schedule(&start, &end, &params);
+        let (delay, clear) = schedule(&start, &end, &params);
         let (u, v) = (
             Way::new(start[0][0], end[0][0], delay[0][0], 1.0),
             Way::new(start[1][0], end[1][0], delay[1][0], 1.0),
         );
+        assert!(clear);
         assert!(least_between(&u, &v) >= 9.0 - 1e-9);
         assert_eq!(delay[0][0], 0.0);
         assert!(delay[1][0] > 0.0, "{delay:?}");
