@@ -142,10 +142,6 @@ pub struct Split {
 }
 
 impl Split {
-    pub fn active(&self) -> bool {
-        self.active.is_some()
-    }
-
     /// The other group's ids while a plan is followed.
     pub fn others(&self) -> Option<Vec<String>> {
         self.active.as_ref().map(|a| a.ids[1 - a.me.0].clone())
@@ -478,7 +474,7 @@ mod tests {
             assert!(matches!(change, Change::Ended { .. }), "{change:?}");
             // Split again, then one of its own group falls silent: ended too.
             split.update(&tick(&neighbours, 10.0));
-            assert!(split.active());
+            assert!(split.others().is_some());
             let mut lost = neighbours.clone();
             let k = lost.iter().position(|n| n.silent.is_none()).unwrap();
             lost[k].silent = Some(Silent { radius: 1.0 });
@@ -546,6 +542,6 @@ mod tests {
         let alone = seen(1, &[2, 3, 4, 5, 6, 7, 8], first);
         let (orders, change) = split.update(&tick(&mission, &ageing, "usv-1", &at, &alone, 10.0));
         assert_eq!((orders, change), (None, Change::None));
-        assert!(!split.active());
+        assert_eq!(split.others(), None);
     }
 }
