@@ -31,15 +31,14 @@ pub async fn run(
     stop: CancellationToken,
 ) -> Result<(), ServeError> {
     let addr = listener.local_addr()?;
+    // Refused before anything starts: the vessels would retry for ever
+    // against a coordinator that never came up.
+    crate::server::check_bind(addr, token.as_deref())?;
     let config = ServeConfig {
         time_warp,
         token: token.clone(),
         record: record.map(|dir| RecorderConfig {
-            target: Target::Directory {
-                dir,
-                max_bytes: 256 * 1024 * 1024,
-                max_duration: std::time::Duration::from_secs(3600),
-            },
+            target: Target::directory(dir),
             wall_clock: true,
         }),
         ..Default::default()
@@ -58,6 +57,10 @@ pub async fn run(
         stop.clone(),
     ));
     // Both end on `stop`; a task that panicked is a bug worth its panic.
-    fleet.await.expect("the demo fleet does not panic");
+    // The demo's vessels carry the coordinator's own token: a refusal
+    // would be a bug, said rather than hidden.
+    if let Err(e) = fleet.await.expect("the demo fleet does not panic") {
+        tracing::error!(error = %e, "the demo's vessels gave up");
+    }
     server.await.expect("the coordinator does not panic")
 }

@@ -199,14 +199,17 @@ function drawTable(snap) {
   snap.vessels.forEach((v, i) => {
     const row = body.rows[i];
     const cells = row.cells;
-    const link = v.connected ? (v.live ? "live" : "silent") : "off";
+    // A quarantined vessel (its poses refused) is out of the partition and
+    // held: "held", the reason on hover and for screen readers.
+    const held = v.quarantine || null;
+    const link = v.connected ? (held ? "held" : v.live ? "live" : "silent") : "off";
     // A vessel an operator has taken over (an autopilot out of GUIDED)
     // keeps its cell but follows no command: a compact badge, the detail
     // on hover (and in text for screen readers), so the table stays narrow.
     const mode = v.pose && v.pose.telemetry && v.pose.telemetry.mode;
     const operator = v.controlled === false;
-    drawLink(cells[1], link, operator, mode);
-    cells[1].className = !v.connected ? "off" : operator ? "operator" : "";
+    drawLink(cells[1], link, operator, mode, held);
+    cells[1].className = !v.connected ? "off" : held ? "held" : operator ? "operator" : "";
     cells[2].textContent = v.last_command ? v.last_command.E.toFixed(2) : "–";
     cells[3].textContent = v.pose ? Math.hypot(v.pose.u, v.pose.v).toFixed(2) : "–";
     cells[4].textContent = v.last_seen == null ? "never" : Math.max(0, snap.time - v.last_seen).toFixed(1);
@@ -217,12 +220,21 @@ function drawTable(snap) {
 }
 
 /** The link cell: its state, and an operator's badge; rebuilt on change only. */
-function drawLink(cell, link, operator, mode) {
-  const key = `${link}|${operator}|${mode || ""}`;
+function drawLink(cell, link, operator, mode, held) {
+  const key = `${link}|${operator}|${mode || ""}|${held ? held.reason : ""}`;
   if (cell.dataset.key === key) return;
   cell.dataset.key = key;
   cell.textContent = link;
   cell.title = "";
+  if (held) {
+    const spoken = document.createElement("span");
+    spoken.className = "sr-only";
+    spoken.textContent = ` · quarantined: ${held.reason}`;
+    cell.append(spoken);
+    cell.title = `quarantined since ${held.since.toFixed(1)} s (${held.refused} poses refused): `
+      + `${held.reason}; out of the partition and told to hold`;
+    return;
+  }
   if (!operator) return;
   const detail = `operator${mode ? ` (${mode})` : ""}`;
   const badge = document.createElement("span");

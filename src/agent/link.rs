@@ -10,8 +10,10 @@
 //!
 //! Invariants: the vessel never waits on the link (poses are a `watch`,
 //! commands are dropped rather than queued when the vessel is behind); the
-//! task ends only on `shutdown` (saying goodbye with a close frame) or when
-//! the URL is unusable.
+//! task ends only on `shutdown` (saying goodbye with a close frame), when
+//! the URL is unusable, or after [`MAX_UNAUTHORIZED`] refusals of its token
+//! in a row (no retry can mend a wrong token; the process should say so and
+//! stop rather than retry for ever).
 
 use std::time::Duration;
 
@@ -178,19 +180,42 @@ fn text<T: serde::Serialize>(value: &T) -> Message {
     Message::text(serde_json::to_string(value).expect("protocol messages serialize"))
 }
 
-/// Keeps the link up until `shutdown`.
+/// Refusals of the token (HTTP 401) in a row after which a link gives up.
+pub const MAX_UNAUTHORIZED: u32 = 3;
+
+/// Why a link gave up.
+#[derive(Debug, Clone, thiserror::Error)]
+pub enum LinkError {
+    #[error("bad coordinator URL {url}: {message}")]
+    Url { url: String, message: String },
+    #[error(
+        "the coordinator refused {vessel}'s token {count} times (HTTP 401: {message}); \
+         give the coordinator's token with --token or the SEACOVER_TOKEN variable"
+    )]
+    Unauthorized {
+        vessel: String,
+        count: u32,
+        message: String,
+    },
+}
+
+/// Keeps the link up until `shutdown`; an error when it gave up.
 pub async fn run(
     config: LinkConfig,
     mut poses: watch::Receiver<Option<PoseDocument>>,
     commands: mpsc::Sender<Inbound>,
     shutdown: CancellationToken,
-) {
+) -> Result<(), LinkError> {
     let mut rng = ChaCha8Rng::seed_from_u64(config.seed);
     let mut backoff = Duration::from_millis(100);
+    let mut unauthorized = 0;
     while !shutdown.is_cancelled() {
         if let Err(e) = request(&config.url, config.token.as_deref()) {
             tracing::error!(url = %config.url, error = %e, "bad coordinator URL");
-            return;
+            return Err(LinkError::Url {
+                url: config.url.clone(),
+                message: e.to_string(),
+            });
         }
         let hello = VesselMessage::Hello {
             vessel: config.vessel.clone(),
@@ -201,7 +226,7 @@ pub async fn run(
         };
         tracing::info!(vessel = %config.vessel, url = %config.url, "connecting to the coordinator");
         let connected = tokio::select! {
-            _ = shutdown.cancelled() => return,
+            _ = shutdown.cancelled() => return Ok(()),
             c = handshake(&config.url, config.token.as_deref(), &hello) => c,
         };
         let socket = match connected {
@@ -210,6 +235,25 @@ pub async fn run(
                 let wait = backoff.mul_f64(rng.random_range(0.5..1.5));
                 let retry_in_ms = wait.as_millis() as u64;
                 match &e {
+                    HandshakeError::Rejected {
+                        status: 401,
+                        message,
+                    } => {
+                        unauthorized += 1;
+                        let given = if config.token.is_some() {
+                            "the token given"
+                        } else {
+                            "no token"
+                        };
+                        tracing::error!(vessel = %config.vessel, %message, attempt = unauthorized, "the coordinator refused the link (HTTP 401, {given}): give its token with --token or the SEACOVER_TOKEN variable");
+                        if unauthorized >= MAX_UNAUTHORIZED {
+                            return Err(LinkError::Unauthorized {
+                                vessel: config.vessel.clone(),
+                                count: unauthorized,
+                                message: message.clone(),
+                            });
+                        }
+                    }
                     HandshakeError::Refused { .. } | HandshakeError::Rejected { .. } => {
                         tracing::warn!(vessel = %config.vessel, error = %e, retry_in_ms, "the coordinator refused the link; retrying");
                     }
@@ -218,13 +262,14 @@ pub async fn run(
                     }
                 }
                 tokio::select! {
-                    _ = shutdown.cancelled() => return,
+                    _ = shutdown.cancelled() => return Ok(()),
                     _ = tokio::time::sleep(wait) => {}
                 }
                 backoff = (backoff * 2).min(Duration::from_secs(5));
                 continue;
             }
         };
+        unauthorized = 0;
         tracing::info!(vessel = %config.vessel, url = %config.url, "connected to the coordinator");
         backoff = Duration::from_millis(100);
         let (mut sink, mut stream) = socket.split();
@@ -235,13 +280,13 @@ pub async fn run(
             tokio::select! {
                 _ = shutdown.cancelled() => {
                     let _ = sink.send(Message::Close(None)).await;
-                    return;
+                    return Ok(());
                 }
                 changed = poses.changed() => {
                     if changed.is_err() {
                         // The vessel is gone: nothing more to report.
                         let _ = sink.send(Message::Close(None)).await;
-                        return;
+                        return Ok(());
                     }
                     let pose = poses.borrow_and_update().clone();
                     if let Some(pose) = pose
@@ -279,10 +324,11 @@ pub async fn run(
         // drains its channel within a step). An error means the vessel is
         // gone, which ends nothing here: shutdown does.
         tokio::select! {
-            _ = shutdown.cancelled() => return,
+            _ = shutdown.cancelled() => return Ok(()),
             _ = commands.send(Inbound::Lost) => {}
         }
     }
+    Ok(())
 }
 
 #[cfg(test)]

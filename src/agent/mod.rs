@@ -145,12 +145,14 @@ pub fn fleet(
     Ok(vessels)
 }
 
-/// Runs every vessel until `shutdown`.
+/// Runs every vessel until `shutdown`, or until a vessel's link gives up
+/// (its token refused): then every vessel stops and that is the error.
 pub async fn run_fleet(
     config: AgentConfig,
     vessels: Vec<VesselConfig>,
     shutdown: CancellationToken,
-) {
+) -> Result<(), link::LinkError> {
+    let stop = shutdown.child_token();
     let tasks: Vec<_> = vessels
         .into_iter()
         .enumerate()
@@ -159,13 +161,18 @@ pub async fn run_fleet(
                 config.clone(),
                 v,
                 config.seed.wrapping_add(i as u64),
-                shutdown.clone(),
+                stop.clone(),
             ))
         })
         .collect();
+    let mut first = None;
     for t in tasks {
-        let _ = t.await;
+        if let Ok(Err(e)) = t.await {
+            stop.cancel();
+            first.get_or_insert(e);
+        }
     }
+    first.map_or(Ok(()), Err)
 }
 
 async fn run_vessel(
@@ -173,11 +180,11 @@ async fn run_vessel(
     vessel: VesselConfig,
     seed: u64,
     shutdown: CancellationToken,
-) {
+) -> Result<(), link::LinkError> {
     let mut onboard = Onboard::new(&vessel);
     let (poses, pose_slot) = watch::channel(None);
     let (commands, mut incoming) = mpsc::channel(4);
-    let link = tokio::spawn(link::run(
+    let mut link = tokio::spawn(link::run(
         LinkConfig {
             url: config.url.clone(),
             token: config.token.clone(),
@@ -203,6 +210,8 @@ async fn run_vessel(
     loop {
         tokio::select! {
             _ = shutdown.cancelled() => break,
+            // The link gave up (a refused token): the vessel's run is over.
+            given_up = &mut link => return given_up.unwrap_or(Ok(())),
             _ = ticker.tick() => {
                 onboard.advance(period);
                 poses.send_replace(Some(onboard.pose()));
@@ -215,5 +224,8 @@ async fn run_vessel(
             },
         }
     }
-    let _ = link.await;
+    match link.await {
+        Ok(Err(e)) => Err(e),
+        _ => Ok(()),
+    }
 }

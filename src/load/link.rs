@@ -205,6 +205,7 @@ pub(super) async fn run_link(
                     r,
                     controlled: None,
                     telemetry: None,
+                    fix: None,
                 });
                 let text = serde_json::to_string(&pose).expect("serializes");
                 let sent = Instant::now();

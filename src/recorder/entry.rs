@@ -8,6 +8,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use super::messages::{EventRecord, SimVesselRecord};
+use super::retention::Keep;
 use crate::protocol::{MissionDocument, PoseDocument, Snapshot};
 
 /// Entries dropped because the writer was behind or stopped.
@@ -31,25 +32,46 @@ pub struct RecorderConfig {
 /// Where recordings go.
 #[derive(Debug, Clone)]
 pub enum Target {
-    /// `DIR/<UTC start>.mcap`, a new file after `max_bytes` or `max_duration`
-    /// (wall clock).
+    /// `DIR/<UTC start>.mcap`, a new file after `max_bytes` (or a quarter
+    /// of `keep`'s byte limit, if smaller) or `max_duration` of mission
+    /// time; the oldest files deleted beyond `keep` ([`super::retention`]).
     Directory {
         dir: PathBuf,
         max_bytes: u64,
         max_duration: Duration,
+        keep: Keep,
     },
     /// One file, never rotated (`seacover sim --record FILE`).
     File(PathBuf),
 }
 
-/// What the recorder is handed.
+/// `--record-max-mb`'s default.
+pub const DEFAULT_MAX_BYTES: u64 = 256 * 1024 * 1024;
+/// `--record-max-minutes`' default: a file per hour of mission time.
+pub const DEFAULT_MAX_DURATION: Duration = Duration::from_secs(3600);
+
+impl Target {
+    /// `dir` with the defaults of `seacover serve`: a file per mission hour
+    /// or 256 MiB, the oldest deleted beyond [`super::retention::DEFAULT_KEEP`].
+    pub fn directory(dir: PathBuf) -> Target {
+        Target::Directory {
+            dir,
+            max_bytes: DEFAULT_MAX_BYTES,
+            max_duration: DEFAULT_MAX_DURATION,
+            keep: Keep::standard(),
+        }
+    }
+}
+
+/// What the recorder is handed. Its variants are at most 32 bytes (what
+/// is bigger is boxed): the hand-over's ring holds 65 536 of them.
 #[derive(Debug)]
 pub enum Entry {
     /// A pose as the coordinator received it, at mission time `time`.
     Pose {
         vessel: Arc<str>,
         time: f64,
-        pose: PoseDocument,
+        pose: Box<PoseDocument>,
     },
     /// A published snapshot. Each new tick's coverage, commands and, for
     /// geo-referenced missions, map channels are recorded from it; a
@@ -61,11 +83,22 @@ pub enum Entry {
         time: f64,
         mission: Box<MissionDocument>,
     },
-    Event(EventRecord),
+    Event(Box<EventRecord>),
     /// `seacover sim`: a vessel's truth, disturbance and estimate.
-    SimVessel(SimVesselRecord),
+    SimVessel(Box<SimVesselRecord>),
     /// `serve --peer`: a peer fleet's beacon as it arrived.
     Beacon(Box<super::messages::BeaconRecord>),
     /// Finish the file and stop.
     Finish,
+}
+
+#[cfg(test)]
+mod tests {
+    /// The hand-over's ring is `CAPACITY` slots of an entry (and a stamp)
+    /// each, resident once cycled through: 48 bytes a slot is 3 MB; an
+    /// unboxed pose made it 9 MB.
+    #[test]
+    fn an_entry_is_small() {
+        assert!(std::mem::size_of::<super::Entry>() <= 40);
+    }
 }

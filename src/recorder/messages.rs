@@ -221,6 +221,11 @@ pub enum EventKind {
     VesselRemoved,
     /// A vessel link's frame was refused.
     RejectedFrame,
+    /// A vessel's pose was refused as implausible: it is out of the
+    /// partition and held (`code` and `detail` say why).
+    Quarantined,
+    /// A quarantined vessel's poses agree again: it is back in.
+    Released,
     /// An HTTP request was refused.
     RejectedRequest,
     /// The coordinator is stopping.

@@ -5,7 +5,14 @@
 //!   system: a `kill -9` of the process loses at most that second, and the
 //!   chunks before it are whole, so MCAP readers recover the file.
 //! - Each file starts with the newest mission, so every file of a rotated
-//!   run stands on its own.
+//!   run stands on its own. A directory's files are rotated by size and by
+//!   mission time (so a warped run gets the same files as a real one), and
+//!   after each flush the oldest are deleted beyond `--record-keep`
+//!   ([`super::retention`]).
+//! - What the writer holds in memory is bounded by its file: mcap's index
+//!   of the open file (a chunk index entry per chunk, about 300 bytes, a
+//!   chunk per second of mission time at most: about 1 MB per mission hour
+//!   of file) is dropped when the file is rotated.
 //! - The first error (an unwritable directory, a full disk) ends the
 //!   recording for good: logged, counted, and everything handed over
 //!   afterwards is dropped. The thread never panics on I/O.
@@ -14,6 +21,7 @@ use std::collections::HashMap;
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::mpsc::{Receiver, TryRecvError};
 use std::time::{Duration, Instant};
 
@@ -23,6 +31,7 @@ use super::messages::{
     self, CommandRecord, EventRecord, FoxgloveTime, GeoJson, LocationFix, MissionRecord,
     PoseRecord, SimVesselRecord, VesselState, ns,
 };
+use super::retention::Shelf;
 use super::{ACTIVE, BYTES, ERRORS, Entry, RecorderConfig, Target};
 use crate::protocol::Snapshot;
 
@@ -65,7 +74,9 @@ pub enum RecordError {
 /// hand-overs) it looks every `IDLE_WAKE`.
 const IDLE_WAKE: Duration = Duration::from_millis(100);
 
-pub(super) fn run(config: RecorderConfig, rx: Receiver<Entry>) {
+/// Writes what `rx` brings until the finish; `ticks` counts the tick
+/// entries handed over and not yet taken (the hand-over caps them).
+pub(super) fn run(config: RecorderConfig, rx: Receiver<Entry>, ticks: &AtomicUsize) {
     if config.wall_clock {
         yield_to_the_coordinator();
     }
@@ -78,6 +89,9 @@ pub(super) fn run(config: RecorderConfig, rx: Receiver<Entry>) {
             match rx.try_recv() {
                 Ok(Entry::Finish) | Err(TryRecvError::Disconnected) => break 'run,
                 Ok(entry) => {
+                    if matches!(entry, Entry::Tick(_)) {
+                        ticks.fetch_sub(1, Ordering::Relaxed);
+                    }
                     if w.file.is_some() {
                         w.guard(|w| w.write(entry));
                     }
@@ -113,12 +127,24 @@ struct OpenFile {
     path: PathBuf,
     /// Channel ids by topic, in this file.
     channels: HashMap<String, u16>,
-    opened: Instant,
+    /// Earliest and latest log time written since the file was opened
+    /// (the mission restated at its start aside): what it spans.
+    span: Option<(u64, u64)>,
     /// Earliest and latest log time in the open chunk.
     chunk_first: Option<(u64, u64)>,
     flushed: Instant,
     /// Bytes on disk at the last flush.
     size: u64,
+    /// The latest log time written before this file opened: nothing in
+    /// the file is logged earlier (see [`Writer::put`]).
+    floor: u64,
+}
+
+impl OpenFile {
+    /// Mission time the file spans so far [ns].
+    fn spanned(&self) -> u64 {
+        self.span.map_or(0, |(lo, hi)| hi - lo)
+    }
 }
 
 struct Writer {
@@ -134,6 +160,11 @@ struct Writer {
     map_second: Option<u64>,
     sequence: u32,
     bytes_total: u64,
+    /// The latest log time written, in any file.
+    latest: u64,
+    /// A directory's closed recordings, for the retention; made when the
+    /// first file is open.
+    shelf: Option<Shelf>,
 }
 
 impl Writer {
@@ -147,6 +178,8 @@ impl Writer {
             map_second: None,
             sequence: 0,
             bytes_total: 0,
+            latest: 0,
+            shelf: None,
         }
     }
 
@@ -220,18 +253,36 @@ impl Writer {
             mcap,
             path,
             channels: HashMap::new(),
-            opened: Instant::now(),
+            span: None,
             chunk_first: None,
             flushed: Instant::now(),
             size: 0,
+            floor: self.latest,
         });
         if let Some((log, mission)) = self.mission.clone() {
+            // Restated when the file starts (its record keeps the time of
+            // the change), so that the file's log times, and the span a
+            // reader sees, begin there and not hours earlier. The file's
+            // own span (for the retention) leaves it out.
             self.put(
                 messages::MISSION,
                 messages::spec::<MissionRecord>,
                 log,
                 &mission,
             )?;
+            if let Some(f) = self.file.as_mut() {
+                f.span = None;
+            }
+        }
+        if self.shelf.is_none()
+            && let (Target::Directory { dir, keep, .. }, Some(f)) =
+                (&self.config.target, &self.file)
+        {
+            // Earlier runs' files, read once; from here on the writer knows
+            // every file it closes.
+            let mut shelf = Shelf::scan(dir, &f.path, *keep);
+            shelf.prune(0, 0);
+            self.shelf = Some(shelf);
         }
         Ok(())
     }
@@ -248,12 +299,17 @@ impl Writer {
                 source,
             })?;
             tracing::info!(path = %f.path.display(), "recording closed");
+            if let Some(shelf) = self.shelf.as_mut() {
+                let size = std::fs::metadata(&f.path).map_or(f.size, |m| m.len());
+                shelf.closed(f.path, size, f.span.map_or(0, |(lo, hi)| hi - lo));
+            }
         }
         Ok(())
     }
 
     /// Closes the open chunk when it is a second old (wall); rotates the
-    /// file when it is too big or too old.
+    /// file when it is too big or spans too much mission time; after a
+    /// flush, deletes what the retention no longer keeps.
     fn flush_if_due(&mut self) -> Result<(), RecordError> {
         let due = self
             .file
@@ -262,21 +318,30 @@ impl Writer {
         if due {
             self.flush()?;
         }
+        let mut rotated = false;
         if let (
             Some(f),
             Target::Directory {
                 max_bytes,
                 max_duration,
+                keep,
                 ..
             },
         ) = (&self.file, &self.config.target)
             // Only a file with something flushed in it is rotated, so that
             // `--record-max-mb 0` means a file a second, not a file a loop.
             && f.size > 0
-            && (f.size >= *max_bytes || f.opened.elapsed() >= *max_duration)
+            && (f.size >= keep.rotation_bytes(*max_bytes)
+                || u128::from(f.spanned()) >= max_duration.as_nanos())
         {
             self.close()?;
             self.open()?;
+            rotated = true;
+        }
+        if (due || rotated)
+            && let (Some(shelf), Some(f)) = (self.shelf.as_mut(), &self.file)
+        {
+            shelf.prune(f.size, f.spanned());
         }
         Ok(())
     }
@@ -304,9 +369,15 @@ impl Writer {
         &mut self,
         topic: &str,
         spec: fn() -> messages::ChannelSpec,
-        log_time: u64,
+        stamp: u64,
         message: &T,
     ) -> Result<(), RecordError> {
+        // Logged no earlier than the file opened: an event stamped on a
+        // link's thread just before the tick that rotated the file reaches
+        // the writer after it, and would otherwise precede the restated
+        // mission in log-time order. Its stamp stays its publish time (and
+        // in the record itself).
+        let log_time = self.file.as_ref().map_or(stamp, |f| stamp.max(f.floor));
         // A chunk spans at most a second of mission time.
         if self
             .file
@@ -321,7 +392,7 @@ impl Writer {
                 .duration_since(std::time::UNIX_EPOCH)
                 .map_or(0, |d| d.as_nanos() as u64)
         } else {
-            log_time
+            stamp
         };
         let sequence = self.sequence;
         self.sequence = self.sequence.wrapping_add(1);
@@ -360,10 +431,15 @@ impl Writer {
                 &data,
             )
             .map_err(mcap_error(&f.path))?;
-        f.chunk_first = Some(match f.chunk_first {
-            Some((lo, hi)) => (lo.min(log_time), hi.max(log_time)),
-            None => (log_time, log_time),
-        });
+        let widen = |span: Option<(u64, u64)>| {
+            Some(match span {
+                Some((lo, hi)) => (lo.min(log_time), hi.max(log_time)),
+                None => (log_time, log_time),
+            })
+        };
+        f.chunk_first = widen(f.chunk_first);
+        f.span = widen(f.span);
+        self.latest = self.latest.max(log_time);
         Ok(())
     }
 
@@ -400,7 +476,12 @@ impl Writer {
             }
             Entry::Event(event) => {
                 let log = ns(event.time);
-                self.put(messages::EVENTS, messages::spec::<EventRecord>, log, &event)
+                self.put(
+                    messages::EVENTS,
+                    messages::spec::<EventRecord>,
+                    log,
+                    &*event,
+                )
             }
             Entry::SimVessel(record) => {
                 let log = ns(record.time);
@@ -408,7 +489,7 @@ impl Writer {
                     messages::SIM_VESSEL,
                     messages::spec::<SimVesselRecord>,
                     log,
-                    &record,
+                    &*record,
                 )
             }
             Entry::Beacon(record) => self.put(
@@ -604,17 +685,17 @@ mod tests {
         );
         for i in 0..100 {
             let event = EventRecord::new(f64::from(i) * 0.1, messages::EventKind::LinkUp);
-            w.guard(|w| w.write(Entry::Event(event)));
+            w.guard(|w| w.write(Entry::Event(Box::new(event))));
         }
         w.guard(|w| w.flush());
         assert!(w.failed, "ENOSPC fails the recording");
         assert!(w.file.is_none());
         // Whatever comes after is dropped, not written.
         w.guard(|w| {
-            w.write(Entry::Event(EventRecord::new(
+            w.write(Entry::Event(Box::new(EventRecord::new(
                 11.0,
                 messages::EventKind::Shutdown,
-            )))
+            ))))
         });
         w.guard(|w| w.close());
         assert!(w.failed && w.file.is_none());

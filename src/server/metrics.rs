@@ -1,6 +1,6 @@
 //! Prometheus metrics (`GET /metrics`): connected and live vessels, tick
 //! duration histogram, skipped ticks, H, messages in and out, rejected
-//! messages by reason, and on Linux the standard process metrics
+//! messages by reason, refused poses by reason and quarantined vessels, and on Linux the standard process metrics
 //! `process_cpu_seconds_total` and `process_resident_memory_bytes`.
 //!
 //! The recorder is process-global (the `metrics` facade allows one), so
@@ -10,6 +10,14 @@
 //! text rather than recorded through the facade: its counters are integers,
 //! and whole CPU seconds are too coarse for `seacover bench load`, which
 //! divides a difference of two scrapes by the wall time between them.
+//!
+//! Invariant: memory is bounded whether or not anyone scrapes. The exporter
+//! keeps every histogram sample (a value and an `Instant`, 24 bytes) in a
+//! queue until an upkeep folds it into the fixed buckets; the upkeep runs
+//! at each render and, on the thread [`handle`] starts, every
+//! [`UPKEEP_EVERY`]. Without that thread a coordinator nobody scraped kept
+//! every tick's duration and every command's delay: 7 MB per mission hour
+//! with 8 vessels at time warp 20 (docs/performance.md, issue 41).
 
 use std::sync::OnceLock;
 
@@ -23,6 +31,11 @@ pub const COVERAGE_H: &str = "seacover_coverage_h";
 pub const MESSAGES_IN: &str = "seacover_messages_in_total";
 pub const MESSAGES_OUT: &str = "seacover_messages_out_total";
 pub const MESSAGES_REJECTED: &str = "seacover_messages_rejected_total";
+/// Poses refused as implausible, by reason (`not_finite`, `out_of_range`,
+/// `time_backwards`, `outside_region`, `too_fast`, `jump`, `fix`).
+pub const POSES_REFUSED: &str = "seacover_poses_refused_total";
+/// Vessels out of the partition and held because their poses are refused.
+pub const VESSELS_QUARANTINED: &str = "seacover_vessels_quarantined";
 /// Commands the safety filter changed (vessel-ticks); over
 /// `seacover_messages_out_total{kind="command"}` it is the intervention rate.
 pub const SAFETY_INTERVENTIONS: &str = "seacover_safety_interventions_total";
@@ -56,7 +69,13 @@ pub const COMMAND_DELAY_BUCKETS: [f64; 46] = {
 
 static HANDLE: OnceLock<PrometheusHandle> = OnceLock::new();
 
-/// The process's Prometheus handle, installing the recorder on first use.
+/// How often histogram samples are folded into their buckets when nobody
+/// scrapes: the queue then holds at most this long's samples (at 1000
+/// vessels and 10 Hz, 10 000 command delays, 240 kB).
+pub const UPKEEP_EVERY: std::time::Duration = std::time::Duration::from_secs(1);
+
+/// The process's Prometheus handle, installing the recorder (and starting
+/// its upkeep thread) on first use.
 pub fn handle() -> &'static PrometheusHandle {
     HANDLE.get_or_init(|| {
         let builder = PrometheusBuilder::new()
@@ -76,6 +95,22 @@ pub fn handle() -> &'static PrometheusHandle {
         let handle = recorder.handle();
         // If another recorder was installed first, ours stays empty but valid.
         let _ = metrics::set_global_recorder(recorder);
+        let upkept = handle.clone();
+        // A thread rather than a task: the handle is process-global and
+        // outlives any one runtime (the tests run several servers in one
+        // process, each on its own runtime). If it cannot be spawned the
+        // renders still drain the queue.
+        let spawned = std::thread::Builder::new()
+            .name("seacover-metrics".into())
+            .spawn(move || {
+                loop {
+                    std::thread::sleep(UPKEEP_EVERY);
+                    upkept.run_upkeep();
+                }
+            });
+        if let Err(e) = spawned {
+            tracing::warn!(error = %e, "no metrics upkeep thread; only scrapes drain histograms");
+        }
         handle
     })
 }

@@ -184,6 +184,14 @@ pub struct Prepared {
     peer: Option<peer::PeerMember>,
 }
 
+/// Refuses to serve `addr` off loopback without a token.
+pub fn check_bind(addr: SocketAddr, token: Option<&str>) -> Result<(), ServeError> {
+    if !addr.ip().is_loopback() && token.is_none() {
+        return Err(ServeError::PublicWithoutToken(addr));
+    }
+    Ok(())
+}
+
 /// Checks the start and starts the tick task; see [`Prepared`].
 pub async fn prepare(
     listener: TcpListener,
@@ -191,9 +199,7 @@ pub async fn prepare(
     shutdown: CancellationToken,
 ) -> Result<Prepared, ServeError> {
     let addr = listener.local_addr()?;
-    if !addr.ip().is_loopback() && config.token.is_none() {
-        return Err(ServeError::PublicWithoutToken(addr));
-    }
+    check_bind(addr, config.token.as_deref())?;
     if let Some(member) = &config.peer {
         // A bad Zenoh configuration stops the start, not the member later.
         member.zenoh.config()?;
@@ -247,6 +253,7 @@ pub async fn prepare(
         TickSettings {
             time_warp: config.time_warp,
             liveness: config.liveness,
+            limits: crate::control::plausibility::Limits::default(),
         },
         store,
     );

@@ -7,8 +7,14 @@
 //! it as they show a linked one. It sends no commands: what the tick would
 //! command is computed for display and dropped here.
 //!
-//! Invariants: the revision it publishes only grows, and starts above the
-//! highest the fleet holds when it joins (a restarted coordinator does not
+//! Invariants: joining a fleet that has a mission, it takes the fleet's
+//! newest revision (stored as its own) and publishes nothing new, unless
+//! told to replace it (`--replace-fleet-mission`): a fresh or stale shore
+//! never re-tasks a running fleet; the same when a vessel shows a newer
+//! revision than it holds. Only an operator's write, or that flag, makes a
+//! new revision, and every revision says who made it and when. The
+//! revision it publishes only grows, and starts above the highest the
+//! fleet holds when it replaces it (a restarted coordinator does not
 //! publish an old revision number); a beacon that fails the wire's checks
 //! changes nothing and is counted (`seacover_peer_refused_total`); a vessel
 //! whose liveliness token goes leaves the tick task's links as a closed
@@ -29,6 +35,7 @@ use super::coordinator::Request;
 use crate::agent::peer::PeerError;
 use crate::agent::peer::session::ZenohOptions;
 use crate::agent::peer::wire::{self, Keys};
+use crate::mission::MissionChange;
 use crate::protocol::peer::PeerMissionDocument;
 use crate::protocol::{ActuatorDocument, MissionDocument, PoseDocument};
 
@@ -42,6 +49,75 @@ pub const PEER_REVISION: &str = "seacover_peer_mission_revision";
 pub struct PeerMember {
     pub fleet: String,
     pub zenoh: ZenohOptions,
+    /// Publish this coordinator's mission over the fleet's
+    /// (`--replace-fleet-mission`).
+    pub replace: bool,
+}
+
+/// The fleet's newest mission revision: every other member's answer (Zenoh's
+/// default consolidation would keep only the last to arrive; this member's
+/// own queryable is not asked).
+async fn fleet_mission(session: &zenoh::Session, keys: &Keys) -> Option<PeerMissionDocument> {
+    let replies = session
+        .get(keys.mission())
+        .consolidation(zenoh::query::ConsolidationMode::None)
+        .allowed_destination(zenoh::sample::Locality::Remote)
+        .timeout(Duration::from_secs(1))
+        .await
+        .ok()?;
+    let mut newest: Option<PeerMissionDocument> = None;
+    while let Ok(reply) = replies.recv_async().await {
+        if let Ok(sample) = reply.result()
+            && let Ok(doc) = wire::decode_mission(&sample.payload().to_bytes())
+            && newest.as_ref().is_none_or(|n| doc.revision > n.revision)
+        {
+            newest = Some(doc);
+        }
+    }
+    newest
+}
+
+/// Makes `doc` the coordinator's mission (validated and stored as any
+/// write is).
+async fn adopt(app: &AppState, doc: &PeerMissionDocument) -> Result<(), PeerError> {
+    let (reply, answer) = oneshot::channel();
+    let failed = |message: String| PeerError::Adopt {
+        revision: doc.revision,
+        message,
+    };
+    app.requests
+        .send(Request::Change {
+            change: MissionChange::Adopt(Box::new(doc.mission.clone())),
+            reply,
+        })
+        .await
+        .map_err(|_| failed("the coordinator is stopping".into()))?;
+    match answer.await {
+        Ok(Ok(_)) => {
+            tracing::info!(
+                revision = doc.revision,
+                by = doc.by.as_deref().unwrap_or("?"),
+                at = doc.at.as_deref().unwrap_or("?"),
+                "took the fleet's mission"
+            );
+            Ok(())
+        }
+        Ok(Err(e)) => Err(failed(e.to_string())),
+        Err(_) => Err(failed("the coordinator is stopping".into())),
+    }
+}
+
+/// A revision this coordinator makes, said to be made by `how`.
+fn ours(revision: u32, mission: &MissionDocument, how: &str) -> Arc<Vec<u8>> {
+    Arc::new(
+        serde_json::to_vec(&PeerMissionDocument {
+            revision,
+            mission: mission.clone(),
+            by: Some(wire::author(&format!("seacover serve --peer: {how}"))),
+            at: Some(wire::now_utc()),
+        })
+        .expect("documents serialize"),
+    )
 }
 
 /// What the member knows of one vessel it registered.
@@ -76,39 +152,45 @@ pub async fn run(
     let keys = Keys {
         fleet: member.fleet.clone(),
     };
-    // The highest revision the fleet holds now: every member's answer
-    // (Zenoh's default consolidation would keep only the last to arrive).
-    let mut fleet_revision: Option<(u32, MissionDocument)> = None;
-    if let Ok(replies) = session
-        .get(keys.mission())
-        .consolidation(zenoh::query::ConsolidationMode::None)
-        .timeout(Duration::from_secs(1))
-        .await
-    {
-        while let Ok(reply) = replies.recv_async().await {
-            if let Ok(sample) = reply.result()
-                && let Ok(doc) = wire::decode_mission(&sample.payload().to_bytes())
-                && fleet_revision
-                    .as_ref()
-                    .is_none_or(|(r, _)| doc.revision > *r)
-            {
-                fleet_revision = Some((doc.revision, doc.mission));
+    let own = app.snapshot.borrow().document.mission.clone();
+    let found = fleet_mission(&session, &keys).await;
+    // Whether another member has answered: until then a mission published
+    // as "the fleet's first" is provisional, since on a busy or slow link
+    // the first query can miss a fleet that is there.
+    let mut settled = found.is_some();
+    // (revision, mission, its document as published, whether to put it)
+    let (revision, own, first, put_first) = match found {
+        Some(doc) if doc.mission == own || !member.replace => {
+            if doc.mission != own {
+                adopt(&app, &doc).await?;
             }
+            let json = Arc::new(serde_json::to_vec(&doc).expect("documents serialize"));
+            // The coordinator's own view of it, which later writes change.
+            let own = app.snapshot.borrow().document.mission.clone();
+            (doc.revision, own, json, false)
         }
-    }
-    let ours = app.snapshot.borrow().document.mission.clone();
-    let revision = match &fleet_revision {
-        Some((r, doc)) if *doc == ours => *r,
-        Some((r, _)) => r + 1,
-        None => 0,
+        Some(doc) => {
+            tracing::warn!(
+                replaced = doc.revision,
+                by = doc.by.as_deref().unwrap_or("?"),
+                "replacing the fleet's mission (--replace-fleet-mission)"
+            );
+            let r = doc.revision + 1;
+            (
+                r,
+                own.clone(),
+                ours(r, &own, "--replace-fleet-mission"),
+                true,
+            )
+        }
+        None => (
+            0,
+            own.clone(),
+            ours(0, &own, "the fleet's first mission"),
+            true,
+        ),
     };
-    let published: Arc<Mutex<Arc<Vec<u8>>>> = Arc::new(Mutex::new(Arc::new(
-        serde_json::to_vec(&PeerMissionDocument {
-            revision,
-            mission: ours.clone(),
-        })
-        .expect("documents serialize"),
-    )));
+    let published: Arc<Mutex<Arc<Vec<u8>>>> = Arc::new(Mutex::new(first));
     let mission_key = keys.mission();
     let answer = published.clone();
     let _queryable = session
@@ -128,10 +210,14 @@ pub async fn run(
         .await
         .map_err(zerr)?;
     let put = |json: &Arc<Vec<u8>>| publisher.put(json.as_slice().to_vec());
-    let first = published.lock().expect("mission lock").clone();
-    put(&first).await.map_err(zerr)?;
+    if put_first {
+        let first = published.lock().expect("mission lock").clone();
+        put(&first).await.map_err(zerr)?;
+        tracing::info!(fleet = %member.fleet, revision, "joined the peer fleet; mission published");
+    } else {
+        tracing::info!(fleet = %member.fleet, revision, "joined the peer fleet; working on its mission");
+    }
     metrics::gauge!(PEER_REVISION).set(revision as f64);
-    tracing::info!(fleet = %member.fleet, revision, "joined the peer fleet; mission published");
 
     let (events, mut incoming) = mpsc::channel::<Event>(4096);
     let tx = events.clone();
@@ -178,7 +264,9 @@ pub async fn run(
     // older one before it goes out again (doubling while any lags).
     let mut put_at = tokio::time::Instant::now();
     let mut repeat = REPEAT_FIRST;
-    let mut last = ours;
+    let mut last = own;
+    // When the fleet was last asked for a newer revision than ours.
+    let mut asked: Option<tokio::time::Instant> = None;
     let mut heard: BTreeMap<String, Heard> = BTreeMap::new();
     // Vessels the tick task refused (an actuator out of range, a full
     // fleet), with the actuator they had: asked again only when it changes.
@@ -217,7 +305,7 @@ pub async fn run(
                 let mission = snapshots.borrow_and_update().document.mission.clone();
                 if mission != last {
                     revision += 1;
-                    let json = Arc::new(serde_json::to_vec(&PeerMissionDocument { revision, mission: mission.clone() }).expect("documents serialize"));
+                    let json = ours(revision, &mission, "an operator's write");
                     *published.lock().expect("mission lock") = json.clone();
                     if let Err(e) = put(&json).await {
                         tracing::warn!(error = %e, "mission revision not published");
@@ -248,21 +336,51 @@ pub async fn run(
                         r: beacon.r,
                         controlled: Some(beacon.controlled),
                         telemetry: None,
+                        fix: None,
                     };
-                    // A vessel works on a revision above ours: ours before a
-                    // restart, taken while the first query found nobody.
-                    // The coordinator is the mission's source: its mission
-                    // goes out again, above the fleet's.
-                    if beacon.rev > revision {
-                        revision = beacon.rev + 1;
-                        let json = Arc::new(serde_json::to_vec(&PeerMissionDocument { revision, mission: last.clone() }).expect("documents serialize"));
-                        *published.lock().expect("mission lock") = json.clone();
-                        if let Err(e) = put(&json).await {
-                            tracing::warn!(error = %e, "mission revision not published");
+                    // A vessel works on a revision above ours (ours from
+                    // before a restart), or on any revision while ours is
+                    // provisional (the same number may be another mission):
+                    // the fleet is asked, and what it holds wins unless this
+                    // coordinator was told to replace it.
+                    // Asked at most every 2 s: the query waits up to 1 s.
+                    let unsure = beacon.rev > revision || (!settled && beacon.rev == revision);
+                    if unsure && asked.is_none_or(|a| a.elapsed() >= Duration::from_secs(2)) {
+                        asked = Some(tokio::time::Instant::now());
+                        let doc = fleet_mission(&session, &keys).await;
+                        settled |= doc.is_some();
+                        // Another member made it, or the first query missed
+                        // it: take it, as on joining.
+                        let differs = |d: &PeerMissionDocument| {
+                            d.revision > revision || (d.revision == revision && d.mission != last)
+                        };
+                        match doc {
+                            Some(doc) if differs(&doc) && !member.replace => {
+                                if let Err(e) = adopt(&app, &doc).await {
+                                    tracing::warn!(error = %e, "the fleet's newer mission was not taken");
+                                    continue;
+                                }
+                                revision = doc.revision;
+                                last = app.snapshot.borrow().document.mission.clone();
+                                *published.lock().expect("mission lock") = Arc::new(serde_json::to_vec(&doc).expect("documents serialize"));
+                                metrics::gauge!(PEER_REVISION).set(revision as f64);
+                                // The adopted mission's snapshot is not a write.
+                                snapshots.borrow_and_update();
+                            }
+                            d if member.replace && (beacon.rev > revision || d.as_ref().is_some_and(differs)) => {
+                                revision = beacon.rev.max(d.map_or(0, |d| d.revision)) + 1;
+                                let json = ours(revision, &last, "--replace-fleet-mission");
+                                *published.lock().expect("mission lock") = json.clone();
+                                if let Err(e) = put(&json).await {
+                                    tracing::warn!(error = %e, "mission revision not published");
+                                }
+                                (put_at, repeat) = (tokio::time::Instant::now(), REPEAT_FIRST);
+                                metrics::gauge!(PEER_REVISION).set(revision as f64);
+                                tracing::info!(revision, "the fleet had a newer revision: the mission published again above it (--replace-fleet-mission)");
+                            }
+                            // Not found yet: asked again at the next beacon.
+                            _ => {}
                         }
-                        (put_at, repeat) = (tokio::time::Instant::now(), REPEAT_FIRST);
-                        metrics::gauge!(PEER_REVISION).set(revision as f64);
-                        tracing::info!(revision, "the fleet had a newer revision: the mission published again above it");
                     }
                     // A vessel still on an older revision once the put had
                     // time to arrive: the put was lost to it (UDP, a link

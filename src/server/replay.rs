@@ -158,6 +158,7 @@ pub fn snapshot_at(recording: &Recording, at: u64) -> Result<Option<Snapshot>, R
                 last_command: commands.get(&v.id).cloned(),
                 last_seen: v.last_seen,
                 neighbours: None,
+                quarantine: None,
             }
         })
         .collect();

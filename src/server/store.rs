@@ -186,6 +186,9 @@ impl Store {
     /// [`Mission::changed`](crate::mission::Mission::changed) answered, which
     /// carries the id a new object was given.
     pub fn apply(&self, change: &MissionChange, result: &ChangeResult) -> Result<(), StoreError> {
+        if let (MissionChange::Adopt(_), ChangeResult::Mission(mission)) = (change, result) {
+            return self.save(mission);
+        }
         self.write(|meta, objects| {
             match (change, result) {
                 (MissionChange::Origin(origin), _) => {

@@ -28,6 +28,51 @@ use crate::recorder::messages::{EventKind, EventRecord};
 pub const MAX_FRAME: usize = 64 * 1024;
 /// Malformed frames tolerated on one link before it is closed.
 const MAX_GARBAGE: u32 = 5;
+/// Poses a link may send per mission second, on average (five times the
+/// 20 Hz a vessel reports at); a burst of as many is allowed. Beyond it
+/// poses are dropped, counted and answered at most once a mission second:
+/// a flooding link cannot take the coordinator's cores from the others.
+pub const MAX_POSE_RATE: f64 = 100.0;
+
+/// A link's pose budget: a token bucket refilled on the mission clock, so
+/// that the limit is per mission second whatever the time warp.
+struct Budget {
+    tokens: f64,
+    at: f64,
+    /// Mission time of the last refusal answered.
+    answered: f64,
+}
+
+impl Budget {
+    fn new(now: f64) -> Budget {
+        Budget {
+            tokens: MAX_POSE_RATE,
+            at: now,
+            answered: f64::NEG_INFINITY,
+        }
+    }
+
+    /// Takes one pose's token at mission time `now`; `false` when spent.
+    fn take(&mut self, now: f64) -> bool {
+        self.tokens = (self.tokens + (now - self.at).max(0.0) * MAX_POSE_RATE).min(MAX_POSE_RATE);
+        self.at = now;
+        if self.tokens >= 1.0 {
+            self.tokens -= 1.0;
+            true
+        } else {
+            false
+        }
+    }
+
+    /// Whether a refusal at `now` is to be answered (once a mission second).
+    fn answer(&mut self, now: f64) -> bool {
+        let due = now - self.answered >= 1.0;
+        if due {
+            self.answered = now;
+        }
+        due
+    }
+}
 /// Initial read buffer of a socket. tungstenite zero-fills its whole read
 /// buffer (128 KiB by default) before the first read, which made every link
 /// cost 128 KiB of resident memory for frames of a few hundred bytes; the
@@ -109,6 +154,8 @@ struct PoseFrame {
     controlled: Option<bool>,
     #[serde(default)]
     telemetry: Option<serde_json::Value>,
+    #[serde(default)]
+    fix: Option<crate::protocol::FixDocument>,
 }
 
 #[derive(serde::Deserialize)]
@@ -130,6 +177,7 @@ fn parse(text: &str) -> Result<VesselMessage, serde_json::Error> {
             r,
             controlled,
             telemetry,
+            fix,
         }) => Ok(VesselMessage::Pose(PoseDocument {
             t,
             x,
@@ -140,6 +188,7 @@ fn parse(text: &str) -> Result<VesselMessage, serde_json::Error> {
             r,
             controlled,
             telemetry,
+            fix,
         })),
         Err(_) => serde_json::from_str(text),
     }
@@ -254,6 +303,8 @@ async fn run_link(mut socket: WebSocket, app: AppState, peer: Option<SocketAddr>
             .peer(peer),
     );
     let mut garbage = 0;
+    let mut budget = Budget::new(app.clock.now());
+    let flooded = metrics::counter!(super::metrics::MESSAGES_REJECTED, "reason" => "rate_limited");
     // Handles looked up once: a lookup hashes the name and labels.
     let poses_in = metrics::counter!(super::metrics::MESSAGES_IN, "kind" => "pose");
     let commands_out = metrics::counter!(super::metrics::MESSAGES_OUT, "kind" => "command");
@@ -284,6 +335,11 @@ async fn run_link(mut socket: WebSocket, app: AppState, peer: Option<SocketAddr>
                     commands_out.increment(1);
                     command_delay.record(due.elapsed().as_secs_f64());
                 }
+                Some(Outgoing::Notice(message)) => {
+                    if socket.send(text(&message)).await.is_err() {
+                        break;
+                    }
+                }
                 Some(Outgoing::Message(message)) => {
                     let fatal = matches!(&message, CoordinatorMessage::Error { .. });
                     if socket.send(text(&message)).await.is_err() || fatal {
@@ -294,6 +350,16 @@ async fn run_link(mut socket: WebSocket, app: AppState, peer: Option<SocketAddr>
             },
             frame = socket.recv() => match frame {
                 Some(Ok(Message::Text(t))) => match parse(&t) {
+                    Ok(VesselMessage::Pose(_)) if !budget.take(app.clock.now()) => {
+                        // Counted once each: by `error` when answered.
+                        if budget.answer(app.clock.now()) {
+                            tracing::warn!(vessel = %id, peer = %peer_text, "vessel link over {MAX_POSE_RATE} poses a mission second: poses dropped");
+                            let refusal = rejected(&app, peer, Some(&id), "rate_limited", format!("more than {MAX_POSE_RATE} poses a mission second: poses dropped"));
+                            let _ = socket.send(text(&refusal)).await;
+                        } else {
+                            flooded.increment(1);
+                        }
+                    }
                     Ok(VesselMessage::Pose(pose)) if finite(&pose) => {
                         poses_in.increment(1);
                         // The clock is read only when recording: this runs

@@ -108,19 +108,20 @@ pub fn record(
                 r: s.vel.z,
                 controlled: None,
                 telemetry: None,
+                fix: None,
             };
             recorder.record(Entry::Pose {
                 vessel: Arc::from(id.as_str()),
                 time: tick.t,
-                pose: pose.clone(),
+                pose: Box::new(pose.clone()),
             });
-            recorder.record(Entry::SimVessel(SimVesselRecord {
+            recorder.record(Entry::SimVessel(Box::new(SimVesselRecord {
                 vessel: id.clone(),
                 time: tick.t,
                 truth: [s.x, s.y, s.psi, s.vel.x, s.vel.y, s.vel.z],
                 disturbance: [v.tau_d.x, v.tau_d.y, v.tau_d.z],
                 estimate: [v.estimate.x, v.estimate.y, v.estimate.z],
-            }));
+            })));
             let c = v.command;
             vessels.push(VesselStatusDocument {
                 id: id.clone(),
@@ -146,9 +147,11 @@ pub fn record(
                     centroid: [v.centroid.x, v.centroid.y],
                     e: c.e,
                     psi_e: c.psi_e,
+                    hold: None,
                 }),
                 last_seen: Some(tick.t),
                 neighbours: None,
+                quarantine: None,
             });
         }
         let snapshot = Snapshot {

@@ -18,7 +18,9 @@ use futures_util::{SinkExt, StreamExt};
 use schemars::generate::SchemaSettings;
 use seacover::agent::peer::wire;
 use seacover::protocol::peer::{BeaconDocument, PeerMissionDocument, PeerStatusDocument};
-use seacover::protocol::{CommandDocument, CoordinatorMessage, PoseDocument, VesselMessage};
+use seacover::protocol::{
+    CommandDocument, CoordinatorMessage, FixDocument, PoseDocument, VesselMessage,
+};
 use seacover::server::ServeConfig;
 use seacover::server::openapi;
 use serde_json::{Value, json};
@@ -191,6 +193,7 @@ fn pose() -> PoseDocument {
         r: 0.02,
         controlled: None,
         telemetry: None,
+        fix: None,
     }
 }
 
@@ -223,11 +226,13 @@ fn the_link_schema_accepts_the_real_messages() {
         VesselMessage::Pose(pose()),
         VesselMessage::Pose(PoseDocument {
             telemetry: Some(json!({"battery": 0.93, "thrusters": [1.5, -0.2], "fault": null})),
+            fix: None,
             ..pose()
         }),
         VesselMessage::Pose(PoseDocument {
             controlled: Some(false),
             telemetry: Some(json!({"mode": "HOLD", "armed": true})),
+            fix: Some(FixDocument::Good),
             ..pose()
         }),
     ];
@@ -248,6 +253,7 @@ fn the_link_schema_accepts_the_real_messages() {
             centroid: [63.67, 24.1],
             e: 3.25,
             psi_e: -0.4,
+            hold: None,
         }),
         CoordinatorMessage::Error {
             code: "malformed".into(),
@@ -976,6 +982,8 @@ fn the_peer_wire_schema_accepts_the_real_documents() {
     let mission = serde_json::to_value(PeerMissionDocument {
         revision: 7,
         mission: seacover::mission::Mission::paper().document(),
+        by: Some("seacover serve --peer on shore-1: PUT /api/v1/mission/region".into()),
+        at: Some("2026-11-27T22:00:00Z".into()),
     })
     .unwrap();
     let status = |revision| {
@@ -984,10 +992,18 @@ fn the_peer_wire_schema_accepts_the_real_documents() {
             revision,
             controlled: revision.is_some(),
             neighbours: 2,
+            partition_since: revision.map(|_| 1_795_000_000.25),
             heard: [("usv-2".to_string(), 0.13), ("usv-9".to_string(), 4.2)].into(),
-            refused: [("oversized".to_string(), 1)].into(),
+            refused: [("oversized".to_string(), 1), ("jump".to_string(), 2)].into(),
+            quarantined: [(
+                "usv-9".to_string(),
+                "moved at 31.2 m/s since its last believed pose, beyond the hull's limit"
+                    .to_string(),
+            )]
+            .into(),
             received: 1523,
             split: revision.map(|_| vec!["usv-5".to_string(), "usv-6".to_string()]),
+            alone: revision.is_none(),
         })
         .unwrap()
     };

@@ -72,7 +72,7 @@ async fn give_token(client: &Client, token: &str) {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_dashboard_shows_the_fleet_and_edits_risk() {
-    let Some((driver_path, chrome)) = browser_or_skip() else {
+    let Some((driver_path, chrome, _heavy)) = browser_or_skip().await else {
         return;
     };
 
@@ -326,7 +326,7 @@ async fn the_dashboard_shows_the_fleet_and_edits_risk() {
     assert_eq!(errors, json!([]), "the page reported errors");
     client.close().await.unwrap();
     stop.cancel();
-    fleet.await.unwrap();
+    fleet.await.unwrap().expect("no vessel link gave up");
     server.stop_unbounded().await;
 }
 
@@ -336,7 +336,7 @@ async fn the_dashboard_shows_the_fleet_and_edits_risk() {
 /// figures).
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_dashboard_keeps_up_with_a_thousand_vessels() {
-    let Some((driver_path, chrome)) = browser_or_skip() else {
+    let Some((driver_path, chrome, _heavy)) = browser_or_skip().await else {
         return;
     };
     // The mission made for a thousand vessels (fleet-1000's 1 km square, as
@@ -426,7 +426,7 @@ async fn the_dashboard_keeps_up_with_a_thousand_vessels() {
 async fn the_dashboard_places_the_map_on_the_globe() {
     use crate::common::geo::{locate, place};
     use geographiclib_rs::{DirectGeodesic, Geodesic};
-    let Some((driver_path, chrome)) = browser_or_skip() else {
+    let Some((driver_path, chrome, _heavy)) = browser_or_skip().await else {
         return;
     };
     // ArduPilot SITL's home, Canberra.
@@ -622,7 +622,7 @@ async fn the_dashboard_places_the_map_on_the_globe() {
 async fn the_dashboard_replays_a_recording() {
     use seacover::recorder::messages::{self, SimVesselRecord};
     use seacover::recorder::reader::Recording;
-    let Some((driver_path, chrome)) = browser_or_skip() else {
+    let Some((driver_path, chrome, _heavy)) = browser_or_skip().await else {
         return;
     };
     let dir = tempfile::tempdir().unwrap();

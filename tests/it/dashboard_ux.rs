@@ -146,7 +146,7 @@ async fn operator_link(url: String, id: &'static str, stop: CancellationToken) {
 /// its overlays, and logs no error.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_live_page_opened_mid_mission() {
-    let Some((driver_path, chrome)) = browser_or_skip() else {
+    let Some((driver_path, chrome, _heavy)) = browser_or_skip().await else {
         return;
     };
     let server = Server::start(ServeConfig {
@@ -353,7 +353,7 @@ async fn a_live_page_opened_mid_mission() {
     assert_quiet(&client, port, false).await;
     client.close().await.unwrap();
     stop.cancel();
-    fleet.await.unwrap();
+    fleet.await.unwrap().expect("no vessel link gave up");
     operator.await.unwrap();
     server.stop_unbounded().await;
 }
@@ -366,7 +366,7 @@ async fn a_live_page_opened_mid_mission() {
 async fn a_replay_page_is_a_replay() {
     use seacover::recorder::messages::{self, CoverageRecord};
     use seacover::recorder::reader::Recording;
-    let Some((driver_path, chrome)) = browser_or_skip() else {
+    let Some((driver_path, chrome, _heavy)) = browser_or_skip().await else {
         return;
     };
     let dir = tempfile::tempdir().unwrap();

@@ -82,7 +82,7 @@ async fn the_paper_fleet_converges_through_the_network() {
     }
     assert!(e_max < 1.0, "E_max {e_max} after {:?}", started.elapsed());
     agents.cancel();
-    fleet.await.unwrap();
+    fleet.await.unwrap().expect("no vessel link gave up");
     server.stop().await;
 }
 
@@ -472,7 +472,7 @@ async fn a_token_guards_writes_and_links_but_not_reads() {
         tokio::time::sleep(Duration::from_millis(50)).await;
     }
     agents.cancel();
-    fleet.await.unwrap();
+    fleet.await.unwrap().expect("no vessel link gave up");
     server.stop().await;
 }
 

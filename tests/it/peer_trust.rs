@@ -5,8 +5,9 @@
 //! and, in one more namespace, first a program without them (it must hear
 //! nothing and be heard by nobody), then one with them that sends every
 //! kind of bad input. Nothing may change (missions, who is in the
-//! partition, positions), and every refusal must be counted in the
-//! vessels' status.
+//! partition, positions), every refusal must be counted in the vessels'
+//! status, and a sender whose beacons are well formed but implausible (far
+//! outside the region) must show as quarantined there.
 //!
 //! Needs root (network namespaces) and the test venv's Python with
 //! eclipse-zenoh and cbor2: skipped with a message without them, a failure
@@ -31,8 +32,11 @@ const FLEET: &str = "trust";
 const TEN_AT_5_HZ: [&str; 6] = ["--count", "10", "--hz", "5", "--wait-subscriber", "10"];
 const PAPER: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/paper.json");
 
-/// Vessel `usv-<i+1>` in host `i`, with the credentials.
+/// Vessel `usv-<i+1>` in host `i`, with the credentials. Its log goes to
+/// `usv-<i+1>.log` beside them: the refusals it logs are what this test
+/// provokes, not news for the test's output.
 fn vessel(medium: &Medium, i: usize, config: &Path) -> KillOnDrop {
+    let log = config.with_file_name(format!("usv-{}.log", i + 1));
     let start = format!("{},{}", 20.0 + 25.0 * i as f64, 30.0 + 10.0 * i as f64);
     let mut cmd = medium.command(i, SEACOVER);
     cmd.args(["agent", "--peer", "--fleet", FLEET, "--id"])
@@ -40,7 +44,8 @@ fn vessel(medium: &Medium, i: usize, config: &Path) -> KillOnDrop {
         .args(["--start", &start, "--mission", PAPER, "--time-warp", "2"])
         .arg("--zenoh-config")
         .arg(config)
-        .env("RUST_LOG", "warn");
+        .env("RUST_LOG", "warn")
+        .stderr(std::fs::File::create(log).unwrap());
     KillOnDrop(cmd.spawn().expect("seacover agent starts"))
 }
 
@@ -222,6 +227,19 @@ fn without_credentials_nothing_is_heard_and_with_them_bad_input_changes_nothing(
                 "--canonical".into(),
             ],
         ),
+        // Decodable and in range, but 1.9 km outside the square (the
+        // margin is 500 m): believed by nobody, kept as traffic only.
+        (
+            "outside_region",
+            vec![
+                "--key-suffix".into(),
+                "beacon/usv-9".into(),
+                "--cbor-json".into(),
+                stamp(2000.0, 0.0, "usv-9"),
+                "--stamp".into(),
+                "--canonical".into(),
+            ],
+        ),
         (
             "id_conflict",
             vec![
@@ -299,6 +317,7 @@ fn without_credentials_nothing_is_heard_and_with_them_bad_input_changes_nothing(
             "out_of_range",
             "other_fleet",
             "mission_invalid",
+            "outside_region",
         ] {
             assert!(
                 refused(doc, reason) > refused(&before[id], reason),
@@ -310,6 +329,12 @@ fn without_credentials_nothing_is_heard_and_with_them_bad_input_changes_nothing(
             "{id}: the invalid mission changed it: {doc}"
         );
         assert_eq!(doc["neighbours"], 2, "{id}: {doc}");
+        assert!(
+            doc["quarantined"]["usv-9"]
+                .as_str()
+                .is_some_and(|why| why.contains("outside the task region")),
+            "{id}: the stand-in outside the region is not shown quarantined: {doc}"
+        );
         let heard: Vec<&String> = doc["heard"].as_object().unwrap().keys().collect();
         assert!(
             heard.iter().all(|h| h.starts_with("usv-")),

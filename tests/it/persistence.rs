@@ -274,7 +274,7 @@ async fn vessels_reconnect_after_a_restart_and_find_the_mission_intact() {
     );
 
     fleet_stop.cancel();
-    fleet.await.unwrap();
+    fleet.await.unwrap().expect("no vessel link gave up");
     server.stop().await;
 }
 

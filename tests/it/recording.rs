@@ -11,7 +11,9 @@ use std::process::{Child, Command, Stdio};
 use std::time::Duration;
 
 use crate::common::process::{KillOnDrop, signal};
-use crate::common::server::{eventually, get_json, record_sim, start, start_saying};
+use crate::common::server::{
+    eventually, get_json, metric_sum, metrics, record_sim, start, start_saying,
+};
 use seacover::recorder::messages;
 use seacover::recorder::reader::Recording;
 use serde_json::{Value, json};
@@ -97,18 +99,7 @@ fn recordings(data: &Path) -> Vec<PathBuf> {
 
 /// A metric's value from `/metrics` (summed over its labels).
 async fn metric(http: &reqwest::Client, addr: &str, name: &str, label: &str) -> f64 {
-    let text = http
-        .get(format!("http://{addr}/metrics"))
-        .send()
-        .await
-        .unwrap()
-        .text()
-        .await
-        .unwrap();
-    text.lines()
-        .filter(|l| l.starts_with(name) && l.contains(label))
-        .filter_map(|l| l.rsplit(' ').next()?.parse::<f64>().ok())
-        .sum()
+    metric_sum(&metrics(http, addr).await, name, label)
 }
 
 fn counts(recording: &Recording) -> BTreeMap<String, u64> {
@@ -332,7 +323,70 @@ async fn off_unwritable_and_rotation() {
     }
 }
 
-/// `--record-max-minutes` rotates by age (here 3 s of wall time), and the
+/// `--record-keep` with a byte limit: the oldest files go first (an
+/// earlier run's file before this run's), names the recorder did not give
+/// are left alone, the directory never holds more than the limit, and
+/// every file left stands alone for Foxglove's reader (it starts with the
+/// mission, is finished, and every message fits its schema).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn retention_deletes_the_oldest_first() {
+    let Some(python) = python() else { return };
+    let http = reqwest::Client::new();
+    let data = tempfile::tempdir().unwrap();
+    let dir = data.path().join("recordings");
+    std::fs::create_dir_all(&dir).unwrap();
+    // An earlier run's file (cut short: it has no summary) and an
+    // operator's note.
+    let earlier = dir.join("2000-01-01T00-00-00Z.mcap");
+    std::fs::write(
+        &earlier,
+        [b"\x89MCAP0\r\n".as_slice(), &[0; 20_000]].concat(),
+    )
+    .unwrap();
+    let note = dir.join("notes.mcap.txt");
+    std::fs::write(&note, b"not a recording").unwrap();
+    const LIMIT: u64 = 60_000;
+    // A quarter of the limit is below a second's worth: a file a second.
+    let mut server = serve(data.path(), &["--record-keep", "60kB"]);
+    let fleet = KillOnDrop(agents(&server.addr, 3));
+    let addr = server.addr.clone();
+    let within = |files: &[PathBuf]| {
+        let bytes: u64 = files
+            .iter()
+            .filter_map(|f| std::fs::metadata(f).ok())
+            .map(|m| m.len())
+            .sum();
+        // A flush may land just before the pass that deletes.
+        assert!(bytes <= LIMIT + 32 * 1024, "{bytes} bytes in {files:?}");
+    };
+    eventually(40, "three files deleted", || async {
+        within(&recordings(data.path()));
+        metric(&http, &addr, "seacover_recording_files_deleted_total", "").await >= 3.0
+    })
+    .await;
+    drop(fleet);
+    signal(server.child.id(), "-TERM");
+    server.child.wait().unwrap();
+    assert!(!earlier.exists(), "the earlier run's file goes first");
+    assert!(note.exists(), "a file the recorder did not name stays");
+    let files: Vec<PathBuf> = recordings(data.path())
+        .into_iter()
+        .filter(|f| f.extension().is_some_and(|e| e == "mcap"))
+        .collect();
+    within(&files);
+    assert!(files.len() >= 2, "{files:?}");
+    for file in &files {
+        let theirs = check(&python, file);
+        assert_eq!(theirs["finished"], true, "{file:?}: {theirs}");
+        assert_eq!(theirs["invalid"], 0, "{file:?}: {theirs}");
+        let r = Recording::open(file).unwrap();
+        let first = r.messages(&|_| true).next().expect("not empty").unwrap();
+        assert_eq!(&*first.topic, messages::MISSION, "{file:?}");
+    }
+}
+
+/// `--record-max-minutes` rotates by age (here 3 s of mission time, 0.75 s
+/// of wall time at warp 4), and the
 /// events channel tells a link's story with who and why: its link up with
 /// the peer, a refused frame (code, peer), its fall into silence (liveness
 /// takeover) and its return, a refused request (code, peer), the link down

@@ -11,9 +11,10 @@
 //! so do they plus the command lag (how far that reference fell behind the
 //! command line): the error against the coordinator's command itself.
 //!
-//! It takes the demo's 120 s of wall-clock time
-//! (`cargo nextest run --test tracking`), which is what the claim is about:
-//! commands crossing a real socket at the real tick rate.
+//! It takes the demo's 120 s of wall-clock time (`cargo test --test it
+//! tracking::`), which is what the claim is about: commands crossing a
+//! real socket at the real tick rate; nothing else heavy runs beside it
+//! (`common::machine`).
 
 use std::time::Duration;
 
@@ -56,6 +57,7 @@ fn worst(poses: &[PoseRecord], key: &str) -> Worst {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_demo_fleet_follows_its_commands() {
+    let _heavy = crate::common::machine::HEAVY.lock().await;
     let dir = tempfile::tempdir().unwrap();
     let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
     let stop = tokio_util::sync::CancellationToken::new();

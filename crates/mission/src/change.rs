@@ -24,6 +24,9 @@ pub enum MissionChange {
     AddObject(RiskObjectInput),
     PutObject(String, RiskObjectInput),
     DeleteObject(String),
+    /// The whole mission replaced by a peer fleet's (a coordinator joining
+    /// a fleet takes the fleet's mission rather than re-task it).
+    Adopt(Box<MissionDocument>),
 }
 
 /// What a change answers with.
@@ -39,6 +42,11 @@ impl Mission {
     /// The mission with `change` applied, validated as `evaluate` validates;
     /// `self` is left untouched when it is rejected.
     pub fn changed(&self, change: &MissionChange) -> Result<(Mission, ChangeResult), MissionError> {
+        if let MissionChange::Adopt(doc) = change {
+            let next = Mission::from_document(doc)?;
+            let answer = ChangeResult::Mission(Box::new(next.document()));
+            return Ok((next, answer));
+        }
         let mut next = self.clone();
         let frame = self.frame();
         let placed =
@@ -129,6 +137,7 @@ impl Mission {
                 }
                 None
             }
+            MissionChange::Adopt(_) => unreachable!("adopted above"),
         };
         next.risk = risk_field(&next.risk_doc)?;
         let answer = match (change, result) {

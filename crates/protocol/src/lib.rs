@@ -12,10 +12,12 @@
 //! `mission::scenario` and answered with `invalid`.
 
 mod cell;
+mod fault;
 pub mod peer;
 mod schema;
 
 pub use cell::{CellDocument, EdgeDocument, EvaluationDocument};
+pub use fault::{FixDocument, QuarantineDocument};
 
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
@@ -561,6 +563,12 @@ pub struct PoseDocument {
     /// reference); the MAVLink bridge sends the autopilot's state.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub telemetry: Option<serde_json::Value>,
+    /// The quality of the position fix, where the source reports one (the
+    /// MAVLink bridge: GPS_RAW_INT's fix type and the EKF's status). A
+    /// pose with a poor fix is refused and its vessel held. Omitted:
+    /// unreported.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fix: Option<FixDocument>,
 }
 
 /// Coordinator → vessel.
@@ -593,6 +601,12 @@ pub struct CommandDocument {
     pub e: f64,
     /// Heading error towards the centroid [rad].
     pub psi_e: f64,
+    /// Present when the vessel is held out of the partition (its poses
+    /// are refused, [`QuarantineDocument`]): why. The vessel keeps
+    /// station where it is (`centroid` is its last believed position, the
+    /// speeds are 0) until commands come without it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hold: Option<String>,
 }
 
 /// `GET /api/v1/mission`.
@@ -710,6 +724,10 @@ pub struct VesselStatusDocument {
     /// a link.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub neighbours: Option<u32>,
+    /// Present while the vessel's poses are refused: it is out of the
+    /// partition and commanded to hold.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub quarantine: Option<QuarantineDocument>,
 }
 
 /// `GET /api/v1/coverage`.

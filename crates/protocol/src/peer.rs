@@ -65,6 +65,14 @@ pub struct PeerMissionDocument {
     pub revision: u32,
     #[serde(flatten)]
     pub mission: MissionDocument,
+    /// Who made this revision: the program, how, and on which host
+    /// (`seacover serve --peer on HOST: PUT /api/v1/mission/region`).
+    /// Absent from members that predate it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub by: Option<String>,
+    /// When it was made, UTC (RFC 3339).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub at: Option<String>,
 }
 
 /// `seacover/<fleet>/status/<id>`: what one member hears and what it
@@ -78,16 +86,29 @@ pub struct PeerStatusDocument {
     pub controlled: bool,
     /// Neighbours in its partition now (heard within `stale_after`).
     pub neighbours: usize,
+    /// When `neighbours` last changed: UTC, s since 1970 (`null` before it
+    /// ever did).
+    #[serde(default)]
+    pub partition_since: Option<f64>,
     /// Each vessel it has heard: the age of its newest beacon [s].
     pub heard: BTreeMap<String, f64>,
     /// Inputs it refused, by reason (`undecodable`, `oversized`,
     /// `out_of_range`, `id_conflict`, `other_fleet`, `mission_invalid`,
-    /// `mission_older`).
+    /// `mission_older`), and beacons it judged implausible, by the judge's
+    /// reason (`outside_region`, `too_fast`, `jump`, `time_backwards`).
     pub refused: BTreeMap<String, u64>,
+    /// Vessels it keeps clear of as traffic but does not believe (their
+    /// beacons failed the plausibility rules), and why.
+    #[serde(default)]
+    pub quarantined: BTreeMap<String, String>,
     /// Beacons it received in all.
     pub received: u64,
     /// While it follows a split's plan (the fleet cut in two, docs/peer.md
     /// "What each loss does"): the other group's ids; `null` otherwise.
     #[serde(default)]
     pub split: Option<Vec<String>>,
+    /// It hears no other vessel of the fleet and holds station (without
+    /// `--alone`).
+    #[serde(default)]
+    pub alone: bool,
 }

@@ -90,6 +90,9 @@ pub enum BridgeError {
     NoOrigin,
     #[error("the mission's origin is not valid: {0}")]
     Origin(crate::geometry::geodesy::GeoError),
+    /// A vehicle's link gave up (its token refused): the bridge stops.
+    #[error(transparent)]
+    Link(#[from] link::LinkError),
 }
 
 /// What the bridge refused, by kind; logged when it changes and at exit.
@@ -103,6 +106,9 @@ pub struct Tally {
     pub undecodable: AtomicU64,
     /// Frames missing from a vehicle's sequence numbers.
     pub frames_lost: AtomicU64,
+    /// The first vehicle link that gave up (a refused token), which stops
+    /// the bridge.
+    pub given_up: std::sync::Mutex<Option<link::LinkError>>,
     /// Messages claiming the system id of a vehicle heard elsewhere first.
     pub duplicate_sysid: AtomicU64,
     /// Positions that are not finite or out of WGS84's range.
@@ -318,7 +324,10 @@ pub async fn run(config: BridgeConfig, shutdown: CancellationToken) -> Result<()
     tasks.close();
     let _ = tokio::time::timeout(Duration::from_secs(2), tasks.wait()).await;
     tally.log("bridge stopped; refused MAVLink input");
-    Ok(())
+    match tally.given_up.lock().expect("tally lock").take() {
+        Some(e) => Err(e.into()),
+        None => Ok(()),
+    }
 }
 
 /// A known vehicle.
@@ -500,7 +509,15 @@ async fn run_vehicle(
                                 poses.send_replace(pose);
                                 if let Some((config, slot, tx)) = link.take() {
                                     link_task = Some(match &peer {
-                                        None => tokio::spawn(link::run(config, slot, tx, stop.clone())),
+                                        None => {
+                                            let (tally, shutdown, stop) = (tally.clone(), shutdown.clone(), stop.clone());
+                                            tokio::spawn(async move {
+                                                if let Err(e) = link::run(config, slot, tx, stop).await {
+                                                    tally.given_up.lock().expect("tally lock").get_or_insert(e);
+                                                    shutdown.cancel();
+                                                }
+                                            })
+                                        }
                                         // A peer node: the boat's own loop on board.
                                         Some(m) => tokio::spawn(m.clone().link(config.vessel.clone(), slot, tx, config.astern.unwrap_or(true), stop.clone())),
                                     });
@@ -511,12 +528,13 @@ async fn run_vehicle(
                         Err(r) => { tally.refused(r); Vec::new() }
                     },
                     MavMessage::GPS_RAW_INT(g) => { v.on_gps(&g); Vec::new() }
+                    MavMessage::EKF_STATUS_REPORT(e) => { v.on_ekf_status(&e); Vec::new() }
                     MavMessage::SYS_STATUS(s) => { v.on_sys_status(&s); Vec::new() }
                     _ => Vec::new(),
                 }
             }
             c = commands.recv() => match c {
-                Some(link::Inbound::Command(c)) => v.on_command(c).into_iter().collect(),
+                Some(link::Inbound::Command(c)) => v.on_command(c),
                 Some(link::Inbound::Lost) => {
                     tracing::warn!(%vessel, "coordinator link lost: stopping the boat");
                     v.on_link_lost()

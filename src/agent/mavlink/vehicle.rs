@@ -25,14 +25,15 @@
 //!   hold unchanged when a simulator runs faster than real time.
 
 use mavlink::dialects::ardupilotmega::{
-    ATTITUDE_DATA, COMMAND_LONG_DATA, GLOBAL_POSITION_INT_DATA, GPS_RAW_INT_DATA, HEARTBEAT_DATA,
-    MavAutopilot, MavCmd, MavFrame, MavMessage, MavModeFlag, MavType, PositionTargetTypemask,
+    ATTITUDE_DATA, COMMAND_LONG_DATA, EKF_STATUS_REPORT_DATA, EkfStatusFlags,
+    GLOBAL_POSITION_INT_DATA, GPS_RAW_INT_DATA, GpsFixType, HEARTBEAT_DATA, MavAutopilot, MavCmd,
+    MavFrame, MavMessage, MavModeFlag, MavType, PositionTargetTypemask,
     SET_POSITION_TARGET_GLOBAL_INT_DATA, SET_POSITION_TARGET_LOCAL_NED_DATA, SYS_STATUS_DATA,
 };
 
 use crate::control::ned;
 use crate::geometry::geodesy::{LatLon, LocalFrame};
-use crate::protocol::{CommandDocument, PoseDocument};
+use crate::protocol::{CommandDocument, FixDocument, PoseDocument};
 
 /// ArduPilot Rover's GUIDED custom mode.
 pub const GUIDED: u32 = 15;
@@ -125,6 +126,8 @@ pub struct Vehicle {
     attitude: Option<Attitude>,
     position: Option<Position>,
     gps_fix: Option<u8>,
+    /// EKF_STATUS_REPORT's flags, once one has come.
+    ekf_flags: Option<EkfStatusFlags>,
     battery: Option<(f64, i8)>,
     /// The newest `time_boot_ms` seen.
     clock_ms: u32,
@@ -149,6 +152,7 @@ impl Vehicle {
             attitude: None,
             position: None,
             gps_fix: None,
+            ekf_flags: None,
             battery: None,
             clock_ms: 0,
             command: None,
@@ -215,6 +219,30 @@ impl Vehicle {
         self.gps_fix = Some(g.fix_type as u8);
     }
 
+    pub fn on_ekf_status(&mut self, e: &EKF_STATUS_REPORT_DATA) {
+        self.ekf_flags = Some(e.flags);
+    }
+
+    /// The position fix as GPS_RAW_INT and EKF_STATUS_REPORT tell it:
+    /// unreported until a GPS_RAW_INT has come; no fix below a 3-D one;
+    /// the estimator's word when it has no absolute horizontal position
+    /// or flags a GPS glitch.
+    fn fix(&self) -> Option<FixDocument> {
+        let gps = self.gps_fix?;
+        if gps < GpsFixType::GPS_FIX_TYPE_3D_FIX as u8 {
+            return Some(FixDocument::NoFix);
+        }
+        match self.ekf_flags {
+            Some(f)
+                if !f.contains(EkfStatusFlags::EKF_POS_HORIZ_ABS)
+                    || f.contains(EkfStatusFlags::EKF_GPS_GLITCHING) =>
+            {
+                Some(FixDocument::Estimator)
+            }
+            _ => Some(FixDocument::Good),
+        }
+    }
+
     pub fn on_sys_status(&mut self, s: &SYS_STATUS_DATA) {
         self.battery = Some((f64::from(s.voltage_battery) / 1000.0, s.battery_remaining));
     }
@@ -253,18 +281,24 @@ impl Vehicle {
     }
 
     /// A command from the coordinator: the setpoint to send, if the
-    /// vehicle is under control.
-    pub fn on_command(&mut self, c: CommandDocument) -> Option<MavMessage> {
+    /// vehicle is under control. A command to hold (the coordinator
+    /// refuses this boat's poses) is a stale command at once: brake, then
+    /// hold where the boat stopped, in ArduPilot's own position loop.
+    pub fn on_command(&mut self, c: CommandDocument) -> Vec<MavMessage> {
+        if c.hold.is_some() {
+            self.command = None;
+            return self.hold_if_stale();
+        }
         let fresh = c.u_d.is_finite() && c.r_d.is_finite();
         self.command = Some((c, self.clock_ms));
         if !(fresh && self.controlled()) {
-            return None;
+            return Vec::new();
         }
         self.hold = None;
         self.braking_since = None;
         let (c, _) = self.command.as_ref().expect("just set");
         let (u_d, r_d) = (c.u_d, c.r_d);
-        Some(self.velocity_setpoint(u_d, r_d))
+        vec![self.velocity_setpoint(u_d, r_d)]
     }
 
     /// The coordinator's link closed: the newest command is as good as
@@ -412,19 +446,27 @@ impl Vehicle {
     }
 
     /// Asks for GLOBAL_POSITION_INT and ATTITUDE at 10 Hz, HEARTBEAT at
-    /// 4 Hz (mode changes seen sooner), SYS_STATUS and GPS_RAW_INT at 1 Hz.
+    /// 4 Hz (mode changes seen sooner), SYS_STATUS, GPS_RAW_INT and
+    /// EKF_STATUS_REPORT at 1 Hz.
     pub fn stream_requests(&self) -> Vec<MavMessage> {
-        [(33u32, 10.0), (30, 10.0), (0, 4.0), (1, 1.0), (24, 1.0)]
-            .into_iter()
-            .map(|(id, hz)| {
-                MavMessage::COMMAND_LONG(COMMAND_LONG_DATA {
-                    command: MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL,
-                    param1: id as f32,
-                    param2: (1e6 / hz) as f32,
-                    ..self.command_to()
-                })
+        [
+            (33u32, 10.0),
+            (30, 10.0),
+            (0, 4.0),
+            (1, 1.0),
+            (24, 1.0),
+            (193, 1.0),
+        ]
+        .into_iter()
+        .map(|(id, hz)| {
+            MavMessage::COMMAND_LONG(COMMAND_LONG_DATA {
+                command: MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL,
+                param1: id as f32,
+                param2: (1e6 / hz) as f32,
+                ..self.command_to()
             })
-            .collect()
+        })
+        .collect()
     }
 
     fn pose(&self, x: f64, y: f64) -> Option<PoseDocument> {
@@ -458,316 +500,10 @@ impl Vehicle {
                 "lon": p.lon,
                 "setpoints": self.setpoints,
             })),
+            fix: self.fix(),
         })
     }
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    const ORIGIN: LatLon = LatLon {
-        lat: -35.363261,
-        lon: 149.165230,
-    };
-
-    fn vehicle(arm: bool) -> Vehicle {
-        Vehicle::new(3, 1, LocalFrame::new(ORIGIN).unwrap(), arm)
-    }
-
-    fn heartbeat(mode: u32, armed: bool) -> HEARTBEAT_DATA {
-        HEARTBEAT_DATA {
-            custom_mode: mode,
-            mavtype: MavType::MAV_TYPE_SURFACE_BOAT,
-            autopilot: MavAutopilot::MAV_AUTOPILOT_ARDUPILOTMEGA,
-            base_mode: if armed {
-                MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED
-                    | MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
-            } else {
-                MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
-            },
-            ..Default::default()
-        }
-    }
-
-    /// 100 m north and 50 m east of the origin (small-offset formulas,
-    /// good to centimetres here), heading 30° east of north, going 2 m/s
-    /// along the bow and turning to starboard at 0.1 rad/s.
-    fn position(time_ms: u32) -> GLOBAL_POSITION_INT_DATA {
-        let m_per_deg_lat = 110_944.0; // at 35.36° S, WGS84
-        let m_per_deg_lon = 90_870.0;
-        let yaw = 30f64.to_radians();
-        GLOBAL_POSITION_INT_DATA {
-            time_boot_ms: time_ms,
-            lat: ((ORIGIN.lat + 100.0 / m_per_deg_lat) * 1e7).round() as i32,
-            lon: ((ORIGIN.lon + 50.0 / m_per_deg_lon) * 1e7).round() as i32,
-            vx: (200.0 * yaw.cos()).round() as i16,
-            vy: (200.0 * yaw.sin()).round() as i16,
-            ..Default::default()
-        }
-    }
-
-    fn attitude(time_ms: u32) -> ATTITUDE_DATA {
-        ATTITUDE_DATA {
-            time_boot_ms: time_ms,
-            yaw: 30f32.to_radians(),
-            yawspeed: 0.1,
-            ..Default::default()
-        }
-    }
-
-    fn command(u_d: f64, r_d: f64) -> CommandDocument {
-        CommandDocument {
-            tick: 1,
-            u_d,
-            r_d,
-            u_d_dot: 0.0,
-            r_d_dot: 0.0,
-            centroid: [0.0, 0.0],
-            e: 1.0,
-            psi_e: 0.0,
-        }
-    }
-
-    #[test]
-    fn a_pose_is_in_the_local_plane_and_seacovers_conventions() {
-        let mut v = vehicle(false);
-        v.on_heartbeat(&heartbeat(GUIDED, true));
-        v.on_attitude(&attitude(1000)).unwrap();
-        let (pose, _) = v.on_position(&position(1000)).unwrap();
-        let pose = pose.unwrap();
-        // An attitude 50 ms older than the position: ψ carried forward by
-        // r·dt (0.1 rad/s to starboard for 50 ms).
-        v.on_attitude(&attitude(1050)).unwrap();
-        let (later, _) = v.on_position(&position(1100)).unwrap();
-        assert!((later.unwrap().psi - (60f64.to_radians() - 0.005)).abs() < 1e-6);
-        assert!(
-            (pose.x - 50.0).abs() < 0.2 && (pose.y - 100.0).abs() < 0.2,
-            "{pose:?}"
-        );
-        // 30° east of north is 60° counter-clockwise from east.
-        assert!((pose.psi - 60f64.to_radians()).abs() < 1e-6);
-        assert!(
-            (pose.u - 2.0).abs() < 0.01 && pose.v.abs() < 0.01,
-            "{pose:?}"
-        );
-        assert!((pose.r + 0.1).abs() < 1e-6);
-        assert_eq!(pose.t, 1.0);
-        assert_eq!(pose.controlled, Some(true));
-    }
-
-    #[test]
-    fn commands_go_out_only_while_armed_and_guided() {
-        let mut v = vehicle(false);
-        v.on_heartbeat(&heartbeat(4, true)); // HOLD
-        assert!(v.on_command(command(1.0, 0.2)).is_none());
-        v.on_heartbeat(&heartbeat(GUIDED, false));
-        assert!(v.on_command(command(1.0, 0.2)).is_none());
-        v.on_heartbeat(&heartbeat(GUIDED, true));
-        let Some(MavMessage::SET_POSITION_TARGET_LOCAL_NED(sp)) = v.on_command(command(1.0, 0.2))
-        else {
-            panic!("no setpoint")
-        };
-        assert_eq!(sp.coordinate_frame as u8, 8); // MAV_FRAME_BODY_NED
-        assert_eq!(sp.type_mask.bits(), 1511);
-        assert_eq!((sp.target_system, sp.target_component), (3, 1));
-        assert_eq!(sp.vx, 1.0);
-        // A positive (counter-clockwise) r_d is a negative NED yaw rate.
-        assert!((sp.yaw_rate + 0.2).abs() < 1e-7);
-        assert_eq!(v.setpoints(), 1);
-    }
-
-    #[test]
-    fn a_stale_command_brakes_then_holds_and_a_fresh_one_resumes() {
-        let mut v = vehicle(false);
-        v.on_heartbeat(&heartbeat(GUIDED, true));
-        v.on_attitude(&attitude(1000)).unwrap();
-        v.on_position(&position(1000)).unwrap();
-        assert!(v.on_command(command(1.5, 0.0)).is_some());
-        // 1.0 s later: still fresh, nothing to send.
-        let (_, out) = v.on_position(&position(2000)).unwrap();
-        assert!(out.is_empty());
-        // 1.1 s, still at 2 m/s: stale, so brake (speed and turn rate 0).
-        let (_, out) = v.on_position(&position(2100)).unwrap();
-        let [MavMessage::SET_POSITION_TARGET_LOCAL_NED(brake)] = out.as_slice() else {
-            panic!("expected a stop, got {out:?}")
-        };
-        assert_eq!(
-            (brake.vx, brake.yaw_rate, brake.type_mask.bits()),
-            (0.0, 0.0, 1511)
-        );
-        // Slowed down: hold where it is now.
-        let slow = |t| GLOBAL_POSITION_INT_DATA {
-            vx: 10,
-            vy: -5,
-            ..position(t)
-        };
-        let (_, out) = v.on_position(&slow(2600)).unwrap();
-        let [MavMessage::SET_POSITION_TARGET_GLOBAL_INT(hold)] = out.as_slice() else {
-            panic!("expected a hold, got {out:?}")
-        };
-        let p = slow(2600);
-        assert_eq!((hold.lat_int, hold.lon_int), (p.lat, p.lon));
-        assert_eq!(hold.type_mask.bits(), POSITION_ONLY);
-        // Not repeated within a second, repeated after it, at the same point
-        // whatever the boat does meanwhile.
-        assert!(v.on_position(&position(3000)).unwrap().1.is_empty());
-        let (_, out) = v.on_position(&position(3700)).unwrap();
-        let [MavMessage::SET_POSITION_TARGET_GLOBAL_INT(again)] = out.as_slice() else {
-            panic!("expected the hold again, got {out:?}")
-        };
-        assert_eq!((again.lat_int, again.lon_int), (p.lat, p.lon));
-        // A new command ends the hold.
-        assert!(v.on_command(command(1.0, 0.1)).is_some());
-        assert!(v.on_position(&position(3800)).unwrap().1.is_empty());
-    }
-
-    #[test]
-    fn a_lost_link_brakes_at_once() {
-        let mut v = vehicle(false);
-        v.on_heartbeat(&heartbeat(GUIDED, true));
-        v.on_attitude(&attitude(1000)).unwrap();
-        v.on_position(&position(1000)).unwrap();
-        assert!(v.on_command(command(1.5, 0.2)).is_some());
-        // 0.1 s after the command, still at 2 m/s: the link drops.
-        v.on_position(&position(1100)).unwrap();
-        let out = v.on_link_lost();
-        let [MavMessage::SET_POSITION_TARGET_LOCAL_NED(brake)] = out.as_slice() else {
-            panic!("expected a stop, got {out:?}")
-        };
-        assert_eq!((brake.vx, brake.yaw_rate), (0.0, 0.0));
-        // The next position keeps braking; a second loss adds nothing.
-        let (_, out) = v.on_position(&position(1200)).unwrap();
-        assert!(matches!(
-            out.as_slice(),
-            [MavMessage::SET_POSITION_TARGET_LOCAL_NED(_)]
-        ));
-        assert!(v.on_link_lost().is_empty());
-        // Not under control: a loss sends nothing.
-        let mut held = vehicle(false);
-        held.on_heartbeat(&heartbeat(4, true));
-        held.on_attitude(&attitude(1000)).unwrap();
-        held.on_position(&position(1000)).unwrap();
-        held.on_command(command(1.0, 0.0));
-        assert!(held.on_link_lost().is_empty());
-    }
-
-    #[test]
-    fn a_boat_that_does_not_slow_down_is_held_after_ten_seconds_of_braking() {
-        let mut v = vehicle(false);
-        v.on_heartbeat(&heartbeat(GUIDED, true));
-        v.on_attitude(&attitude(1000)).unwrap();
-        v.on_position(&position(1000)).unwrap();
-        // No command ever: stale from the start; it keeps reporting 2 m/s.
-        for t in (1100..11_000).step_by(100) {
-            let (_, out) = v.on_position(&position(t)).unwrap();
-            assert!(matches!(
-                out.as_slice(),
-                [MavMessage::SET_POSITION_TARGET_LOCAL_NED(_)]
-            ));
-        }
-        let (_, out) = v.on_position(&position(11_200)).unwrap();
-        assert!(matches!(
-            out.as_slice(),
-            [MavMessage::SET_POSITION_TARGET_GLOBAL_INT(_)]
-        ));
-    }
-
-    #[test]
-    fn an_operator_takeover_sends_nothing_and_is_never_undone() {
-        let mut v = vehicle(true);
-        v.on_heartbeat(&heartbeat(GUIDED, true)); // --arm is satisfied
-        v.on_attitude(&attitude(1000)).unwrap();
-        v.on_position(&position(1000)).unwrap();
-        assert!(v.controlled());
-        let out = v.on_heartbeat(&heartbeat(4, true)); // operator: HOLD
-        assert!(out.is_empty());
-        assert!(!v.controlled());
-        for t in (1100..10_000).step_by(100) {
-            let (pose, out) = v.on_position(&position(t)).unwrap();
-            assert!(out.is_empty(), "sent {out:?} to a boat in HOLD");
-            assert_eq!(pose.unwrap().controlled, Some(false));
-            assert!(v.on_command(command(1.0, 0.0)).is_none());
-            assert!(v.on_heartbeat(&heartbeat(4, true)).is_empty());
-        }
-        v.on_heartbeat(&heartbeat(GUIDED, true));
-        assert!(v.on_command(command(1.0, 0.0)).is_some());
-    }
-
-    #[test]
-    fn arm_switches_to_guided_then_arms_then_stops_asking() {
-        let mut v = vehicle(true);
-        let out = v.on_heartbeat(&heartbeat(0, false)); // MANUAL, disarmed
-        let [MavMessage::COMMAND_LONG(c)] = out.as_slice() else {
-            panic!("{out:?}")
-        };
-        assert_eq!(c.command, MavCmd::MAV_CMD_DO_SET_MODE);
-        assert_eq!(c.param2, 15.0);
-        // Not again within a second of vehicle time.
-        assert!(v.on_heartbeat(&heartbeat(0, false)).is_empty());
-        v.on_attitude(&attitude(1500)).unwrap();
-        let out = v.on_heartbeat(&heartbeat(GUIDED, false));
-        let [MavMessage::COMMAND_LONG(c)] = out.as_slice() else {
-            panic!("{out:?}")
-        };
-        assert_eq!(c.command, MavCmd::MAV_CMD_COMPONENT_ARM_DISARM);
-        assert_eq!(c.param1, 1.0);
-        assert!(v.on_heartbeat(&heartbeat(GUIDED, true)).is_empty());
-        // Disarmed later by the operator: the bridge does not re-arm.
-        v.on_attitude(&attitude(9000)).unwrap();
-        assert!(v.on_heartbeat(&heartbeat(GUIDED, false)).is_empty());
-    }
-
-    #[test]
-    fn bad_positions_and_attitudes_are_refused_and_change_nothing() {
-        let mut v = vehicle(false);
-        v.on_heartbeat(&heartbeat(GUIDED, true));
-        v.on_attitude(&attitude(1000)).unwrap();
-        let (good, _) = v.on_position(&position(1000)).unwrap();
-        let far = GLOBAL_POSITION_INT_DATA {
-            lat: 10_000_000,
-            lon: 10_000_000,
-            ..position(1100)
-        };
-        assert_eq!(v.on_position(&far).unwrap_err(), Refusal::FarFromOrigin);
-        // The antipode: near the origin in the plane, not on the globe.
-        let antipode = GLOBAL_POSITION_INT_DATA {
-            lat: (-ORIGIN.lat * 1e7).round() as i32,
-            lon: ((ORIGIN.lon - 180.0) * 1e7).round() as i32,
-            ..position(1100)
-        };
-        assert_eq!(
-            v.on_position(&antipode).unwrap_err(),
-            Refusal::FarFromOrigin
-        );
-        let wild = GLOBAL_POSITION_INT_DATA {
-            lat: 95 * 10_000_000,
-            ..position(1100)
-        };
-        assert_eq!(v.on_position(&wild).unwrap_err(), Refusal::InvalidPosition);
-        let nan = ATTITUDE_DATA {
-            yaw: f32::NAN,
-            ..attitude(1100)
-        };
-        assert_eq!(v.on_attitude(&nan).unwrap_err(), Refusal::InvalidAttitude);
-        let inf = ATTITUDE_DATA {
-            yawspeed: f32::INFINITY,
-            ..attitude(1100)
-        };
-        assert_eq!(v.on_attitude(&inf).unwrap_err(), Refusal::InvalidAttitude);
-        let (again, _) = v.on_position(&position(1000)).unwrap();
-        let state = |p: Option<PoseDocument>| p.map(|p| (p.t, p.x, p.y, p.psi, p.u, p.v, p.r));
-        assert_eq!(state(good), state(again));
-    }
-
-    #[test]
-    fn ground_stations_are_not_vehicles() {
-        let gcs = HEARTBEAT_DATA {
-            mavtype: MavType::MAV_TYPE_GCS,
-            autopilot: MavAutopilot::MAV_AUTOPILOT_INVALID,
-            ..Default::default()
-        };
-        assert!(!is_vehicle(&gcs));
-        assert!(is_vehicle(&heartbeat(GUIDED, true)));
-    }
-}
+mod tests;

@@ -62,6 +62,8 @@ mod tests {
         PeerMissionDocument {
             revision,
             mission: Mission::paper().document(),
+            by: None,
+            at: None,
         }
     }
 

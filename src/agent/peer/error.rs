@@ -24,4 +24,9 @@ pub enum PeerError {
     Id(String),
     #[error("zenoh: {0}")]
     Zenoh(String),
+    #[error(
+        "the fleet's mission revision {revision} could not be taken ({message}); \
+         nothing was published: start with --replace-fleet-mission to replace it"
+    )]
+    Adopt { revision: u32, message: String },
 }

@@ -49,6 +49,12 @@ pub struct PeerConfig {
     /// Beacons per second of mission time.
     pub beacon_hz: f64,
     pub ageing: table::Ageing,
+    /// Cover even while hearing no other vessel (`--alone`, single-boat
+    /// work). Without it a vessel that hears nobody (the only one left, or
+    /// one whose credentials the fleet refuses) holds station: covering the
+    /// whole region by itself would take it onto water a fleet it cannot
+    /// hear is working.
+    pub alone: bool,
 }
 
 impl PeerConfig {
@@ -63,6 +69,7 @@ impl PeerConfig {
             time_warp: 1.0,
             beacon_hz: 5.0,
             ageing: table::Ageing::default(),
+            alone: false,
         })
     }
 }
@@ -83,5 +90,10 @@ pub fn mission_file(path: &std::path::Path) -> Result<PeerMissionDocument, PeerE
     Ok(PeerMissionDocument {
         revision: 0,
         mission: mission.document(),
+        by: Some(wire::author(&format!(
+            "seacover agent --mission {}",
+            path.display()
+        ))),
+        at: Some(wire::now_utc()),
     })
 }

@@ -79,6 +79,12 @@ impl Shared {
         });
         match result {
             Ok(true) => {
+                let region = self
+                    .mission
+                    .borrow()
+                    .as_ref()
+                    .map(|r| r.mission.region.clone());
+                self.table.lock().expect("table lock").set_region(region);
                 let rev = self.mission.borrow().as_ref().map(|r| r.revision);
                 tracing::info!(fleet = %self.keys.fleet, revision = ?rev, "took a new mission revision");
             }
@@ -377,11 +383,16 @@ struct Declared {
     seq: u8,
     ticks: u64,
     partition: usize,
+    /// When `partition` last changed (UTC, s; 0 before it ever did).
+    partition_since: f64,
     controlled: bool,
     /// The hull cannot go astern: its guidance is ahead only.
     ahead_only: bool,
     /// The plan it follows while the fleet is split.
     split: Split,
+    /// Since when (mission time) it has heard no other vessel and holds,
+    /// while it does.
+    alone: Option<f64>,
 }
 
 impl Declared {
@@ -422,9 +433,11 @@ impl Declared {
             seq: 0,
             ticks: 0,
             partition: 0,
+            partition_since: 0.0,
             controlled: false,
             ahead_only: false,
             split: Split::default(),
+            alone: None,
         })
     }
 
@@ -437,6 +450,13 @@ impl Declared {
         });
     }
 
+    fn set_partition(&mut self, n: usize) {
+        if n != self.partition {
+            self.partition = n;
+            self.partition_since = utc_now();
+        }
+    }
+
     /// Keeps the guidance ahead only (a hull that cannot go astern).
     fn set_ahead_only(&mut self, ahead_only: bool) {
         self.ahead_only = ahead_only;
@@ -446,7 +466,7 @@ impl Declared {
     }
 
     async fn answer(&self, shared: &Shared, query: zenoh::query::Query) {
-        let doc = status_document(
+        let mut doc = status_document(
             shared,
             &self.id,
             &self.current,
@@ -454,6 +474,8 @@ impl Declared {
             self.partition,
             &self.split,
         );
+        doc.alone = self.alone.is_some();
+        doc.partition_since = (self.partition_since > 0.0).then_some(self.partition_since);
         let json = serde_json::to_vec(&doc).expect("documents serialize");
         let _ = query.reply(shared.keys.status(&self.id), json).await;
     }
@@ -484,7 +506,29 @@ impl Declared {
             return None;
         };
         let ageing = &shared.config.ageing;
-        let mut neighbours = shared.table.lock().expect("table lock").neighbours_near(
+        if !shared.config.alone {
+            let heard = shared.table.lock().expect("table lock").hears_another(
+                &self.id,
+                Instant::now(),
+                ageing,
+            );
+            match (heard, self.alone) {
+                (false, None) => {
+                    tracing::warn!(vessel = %self.id, fleet = %shared.keys.fleet, "hears no other vessel of the fleet (none there, or its credentials refused): holding station; --alone covers alone");
+                    self.alone = Some(t);
+                }
+                (true, Some(since)) => {
+                    tracing::info!(vessel = %self.id, held = t - since, "hears the fleet again: covering");
+                    self.alone = None;
+                }
+                _ => {}
+            }
+            if self.alone.is_some() {
+                self.set_partition(0);
+                return Some(hold(self.ticks, own));
+            }
+        }
+        let neighbours = shared.table.lock().expect("table lock").neighbours_near(
             &self.id,
             (own.x, own.y),
             super::step::relevance(&rev.mission, actuator),
@@ -502,9 +546,9 @@ impl Declared {
             t,
         });
         log_split(&self.id, t, &change);
-        if let Some(o) = &orders {
-            neighbours.retain(|n| !o.others.iter().any(|(id, _)| *id == n.beacon.id));
-        }
+        // The other group stays an obstacle where it fell silent too, not
+        // only where the plan has it: two boats lost at once look like a
+        // partition, and a wreck does not follow the plan.
         let step = super::step::step(
             &rev.mission,
             own,
@@ -517,7 +561,7 @@ impl Declared {
             &mut self.scratch,
         );
         self.ticks += 1;
-        self.partition = step.partition;
+        self.set_partition(step.partition);
         Some(step.command)
     }
 
@@ -567,7 +611,7 @@ async fn run_vessel(
     };
     let mut v = Declared::new(&member, &vessel.id).await?;
     let config = &shared.config;
-    let mut onboard = Onboard::new(&vessel);
+    let mut onboard = Onboard::new(&vessel).without_keeper();
     let period = 0.05; // the hull's step between looks at the world [s]
     let beacon_every = 1.0 / config.beacon_hz;
     let (mut next_beacon, mut next_control) = (0.0, 0.0);
@@ -639,7 +683,25 @@ fn status_document(
         neighbours: partition,
         heard,
         refused: table.refused(),
+        quarantined: table.quarantined(),
         received: table.received(),
         split: split.others(),
+        alone: false,
+        partition_since: None,
+    }
+}
+
+/// The command to keep station where the vessel is (it hears no other).
+fn hold(tick: u64, own: &crate::control::model::State) -> crate::protocol::CommandDocument {
+    crate::protocol::CommandDocument {
+        tick,
+        u_d: 0.0,
+        r_d: 0.0,
+        u_d_dot: 0.0,
+        r_d_dot: 0.0,
+        centroid: [own.x, own.y],
+        e: 0.0,
+        psi_e: 0.0,
+        hold: Some("hears no other vessel of the fleet".into()),
     }
 }

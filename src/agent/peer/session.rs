@@ -88,7 +88,7 @@ const LEASE: &str = "transport/link/tx/lease";
 /// and is heard again with its next beacon; a link that closed would wait
 /// for multicast scouting, which backs off to one attempt every 8 s.
 /// Staleness is judged by beacon age, never by the link.
-pub const PEER_LEASE_MS: u64 = 60_000;
+pub const PEER_LEASE_MS: u64 = 120_000;
 
 /// Whether a configuration file chose `key`: Zenoh's defaults fill in
 /// whatever a file leaves out, so a file chose it when it differs from

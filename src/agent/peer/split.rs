@@ -27,8 +27,11 @@
 //! so that the hull itself is where the plan has it), not to its cell's
 //! centroid; the other group's vessels are obstacles where the plan has
 //! them, with [`SLACK`] for how far each may be off its plan, and not
-//! trusted to keep their half of a gap. Its cell is still computed among
-//! its own group (what it reports as its partition).
+//! trusted to keep their half of a gap; and, until they are forgotten,
+//! where they fell silent too, with the table's drift allowance: two boats
+//! that die together look like a partition, and wrecks follow no plan.
+//! Its cell is still computed among its own group (what it reports as its
+//! partition).
 //!
 //! ## When it ends
 //! When any vessel of the other group is heard again (the partition
@@ -191,7 +194,7 @@ impl Split {
             .iter()
             .filter(|n| n.silent.is_some() && first - n.age <= TOGETHER)
             .collect();
-        let fresh: Vec<&Neighbour> = neighbours.iter().filter(|n| n.silent.is_none()).collect();
+        let fresh: Vec<&Neighbour> = neighbours.iter().filter(|n| n.in_partition()).collect();
         if others.len() < 2 || fresh.is_empty() {
             return Change::None;
         }
@@ -236,7 +239,13 @@ impl Split {
         let groups =
             [first_group, second_group].map(|g| g.iter().map(|(_, v)| *v).collect::<Vec<_>>());
         let safety = mission.safety.barrier().safety_distance;
-        let params = SplitParams::both(safety + 2.0 * SLACK, SPEED);
+        // Until the silent group is forgotten, every way keeps clear of
+        // where it fell silent as the filter will (the safety distance and
+        // the drift allowance, with the slack): they may be wrecks.
+        let params = SplitParams {
+            starts_kept: Some((safety + ageing.allowance + SLACK, ageing.forget_after)),
+            ..SplitParams::both(safety + 2.0 * SLACK, SPEED)
+        };
         let Some(plan) = split::plan(
             &mission.region,
             &mission.risk,
@@ -383,6 +392,7 @@ mod tests {
                 controlled: true,
             },
             silent: age.map(|a| Silent { radius: 0.2 * a }),
+            quarantined: None,
         }
     }
 

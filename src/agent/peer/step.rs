@@ -4,14 +4,17 @@
 //! mission's safety layer with the neighbours as the traffic; the same
 //! engine functions as the coordinator's tick, for one vessel.
 //!
-//! Invariants: only fresh neighbours are in the partition (a silent one's
-//! water is taken over); every neighbour not yet forgotten is in the
-//! safety filter's traffic, a silent one with its uncertainty radius and
-//! not trusted to keep its half of a gap; a neighbour with another β than
-//! this vessel's bounds its cell by a circle (the engine's curved cells);
+//! Invariants: only fresh, believed neighbours are in the partition (a
+//! silent one's water is taken over, a quarantined one is not trusted
+//! with any); every neighbour not yet forgotten is in the safety filter's
+//! traffic, a silent one with its uncertainty radius, and neither a
+//! silent nor a quarantined one trusted to keep its half of a gap; a
+//! neighbour with another β than this vessel's bounds its cell by a
+//! circle (the engine's curved cells);
 //! while the fleet is split and a plan is followed ([`split`](super::split)),
 //! the vessel steers to its planned place instead of its centroid and the
-//! other group is traffic where the plan has it. Pure: no I/O, no clock.
+//! other group is traffic both where the plan has it and where it fell
+//! silent. Pure: no I/O, no clock.
 
 use super::split::Orders;
 use super::table::Neighbour;
@@ -82,8 +85,9 @@ pub fn relevance(mission: &Mission, actuator: (f64, f64)) -> impl Fn(f64, f64) -
 
 /// One tick: `own` is this vessel's state and actuator (k, β as the wire
 /// carries them), `t` its mission time, `tick` the command's number;
-/// `orders` a split's plan's (the other group then left out of
-/// `neighbours`).
+/// `orders` a split's plan's (the other group, silent in `neighbours`,
+/// then kept clear of twice: where it fell silent and where the plan has
+/// it).
 #[allow(clippy::too_many_arguments)]
 pub fn step(
     mission: &Mission,
@@ -104,7 +108,7 @@ pub fn step(
     };
     let fresh: Vec<Vessel> = neighbours
         .iter()
-        .filter(|n| n.silent.is_none())
+        .filter(|n| n.in_partition())
         .map(|n| Vessel {
             position: Point {
                 x: n.beacon.x,
@@ -129,10 +133,10 @@ pub fn step(
     let layer = &mission.layer;
     let tick_inputs = layer.prepare_with(t, &states, &gains, |i| match i {
         0 => Margin::KNOWN,
-        i if i <= neighbours.len() => match neighbours[i - 1].silent {
-            None => Margin::KNOWN,
-            Some(s) => Margin {
-                radius: s.radius,
+        i if i <= neighbours.len() => match &neighbours[i - 1] {
+            n if n.in_partition() => Margin::KNOWN,
+            n => Margin {
+                radius: n.silent.map_or(0.0, |s| s.radius),
                 reciprocal: false,
             },
         },
@@ -168,6 +172,7 @@ pub fn step(
             centroid: [c.x, c.y],
             e: cmd.e,
             psi_e: cmd.psi_e,
+            hold: None,
         },
         cell,
         partition,

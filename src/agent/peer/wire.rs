@@ -221,6 +221,26 @@ pub fn decode(bytes: &[u8], key_id: &str) -> Result<BeaconDocument, Refusal> {
 
 /// A mission document received on the mission key: its shape (validation
 /// of its content is the mission layer's, `Mission::from_document`).
+/// `what` on this host: who made a mission revision
+/// ([`PeerMissionDocument::by`]).
+pub fn author(what: &str) -> String {
+    let mut name = [0u8; 256];
+    // SAFETY: the buffer is writable for its whole length, which is passed.
+    let ok = unsafe { libc::gethostname(name.as_mut_ptr().cast(), name.len()) } == 0;
+    let end = name.iter().position(|&b| b == 0).unwrap_or(name.len());
+    match std::str::from_utf8(&name[..end]) {
+        Ok(host) if ok && !host.is_empty() => format!("{what} on {host}"),
+        _ => what.to_string(),
+    }
+}
+
+/// The UTC time now, RFC 3339, for [`PeerMissionDocument::at`].
+pub fn now_utc() -> String {
+    time::OffsetDateTime::now_utc()
+        .format(&time::format_description::well_known::Rfc3339)
+        .unwrap_or_default()
+}
+
 pub fn decode_mission(bytes: &[u8]) -> Result<PeerMissionDocument, Refusal> {
     if bytes.len() > MAX_MISSION {
         return Err(Refusal::Oversized);

@@ -22,6 +22,7 @@
 //!   writing them.
 
 pub mod history;
+mod judging;
 #[cfg(test)]
 mod tests;
 mod tick;
@@ -40,6 +41,7 @@ use super::store::Store;
 use crate::control::barrier::Scratch;
 use crate::control::guidance::{Agility, Guidance};
 use crate::control::model::State;
+use crate::control::plausibility::Limits;
 use crate::coverage::cells::cells_with;
 use crate::coverage::evaluate::cell_figures;
 use crate::coverage::{CellResult, Evaluation, Fleet, Options, Vessel, evaluate};
@@ -111,12 +113,15 @@ impl Deref for Snapshot {
 }
 
 /// Settings of the tick task.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TickSettings {
     /// Wall-clock speed-up (MOOS-IvP's time warp).
     pub time_warp: f64,
     /// A vessel silent longer than this (mission seconds) leaves the partition.
     pub liveness: f64,
+    /// What a vessel's poses must keep to (per vessel; a refusal
+    /// quarantines that vessel alone).
+    pub limits: Limits,
 }
 
 struct Link {
@@ -130,6 +135,8 @@ struct Link {
 pub enum Outgoing {
     /// A welcome or an error; an error closes the link.
     Message(CoordinatorMessage),
+    /// An error that leaves the link open (a refused pose).
+    Notice(CoordinatorMessage),
     /// A tick's command, serialized on the thread that computed it (the
     /// link only frames and writes it).
     Command {
@@ -158,17 +165,29 @@ struct Entry {
     last_command: Option<CommandDocument>,
     /// Its own neighbour count, when it is a peer fleet's vessel.
     neighbours: Option<u32>,
+    /// Its poses judged on their own, and its quarantine.
+    standing: judging::Standing,
 }
 
-/// Takes a link's pose into its entry when the link has sent a new one since
-/// the last look; the vessel was then seen at `tick`.
-fn take_pose(entry: &mut Entry, poses: &mut watch::Receiver<Option<PoseDocument>>, tick: u64) {
-    let newest = poses.borrow_and_update();
-    if newest.has_changed()
-        && let Some(pose) = newest.as_ref()
-    {
+/// Takes a link's pose into `entry` (vessel `id`) when the link has sent a
+/// new one since the last look, judged ([`judging`]): a believed pose
+/// becomes the vessel's, any pose at all means it was heard at `tick`, and
+/// a refusal is answered on the link's `tx`.
+fn take_pose(id: &str, entry: &mut Entry, link: &mut Link, tick: u64, bench: &judging::Bench<'_>) {
+    let newest = link.poses.borrow_and_update();
+    if !newest.has_changed() {
+        return;
+    }
+    let Some(pose) = newest.as_ref() else {
+        return;
+    };
+    entry.last_seen_tick = Some(tick);
+    let judged = entry.standing.judge(id, pose, bench);
+    if judged.believed {
         entry.pose = Some(pose.clone());
-        entry.last_seen_tick = Some(tick);
+    }
+    if let Some(notice) = judged.notice {
+        let _ = link.tx.try_send(Outgoing::Notice(notice));
     }
 }
 
@@ -421,6 +440,7 @@ impl Coordinator {
                     guidance: Guidance::new(gains),
                     last_command: None,
                     neighbours: None,
+                    standing: judging::Standing::default(),
                 });
                 if let Some(old) = entry.link.take() {
                     let _ = old.tx.try_send(
@@ -516,13 +536,21 @@ impl Coordinator {
                 forgotten
             }
             Request::Gone { id, link } => {
-                let tick = self.tick;
+                let (tick, bench) = (
+                    self.tick,
+                    judging::Bench {
+                        limits: &self.settings.limits,
+                        region: &self.mission.region,
+                        time: self.time(),
+                        recorder: &self.recorder,
+                    },
+                );
                 if let Some(entry) = self.vessels.get_mut(&id)
                     && entry.link.as_ref().is_some_and(|l| l.id == link)
                 {
                     // A pose sent just before the link closed still counts.
                     if let Some(mut link) = entry.link.take() {
-                        take_pose(entry, &mut link.poses, tick);
+                        take_pose(&id, entry, &mut link, tick, &bench);
                     }
                 }
                 false

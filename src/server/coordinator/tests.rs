@@ -2,6 +2,7 @@
 
 use super::*;
 use crate::control::Vec3;
+use crate::control::plausibility::Limits;
 
 /// A coordinator of `mission` in real time, with no store. (Its
 /// snapshots go to no reader: publishing needs none.)
@@ -9,6 +10,7 @@ fn coordinator(mission: &Mission) -> Coordinator {
     let settings = TickSettings {
         time_warp: 1.0,
         liveness: 3.0,
+        limits: Limits::default(),
     };
     Coordinator::new(mission.clone(), settings, None).0
 }
@@ -204,6 +206,7 @@ fn the_watch_carries_a_bounded_history_from_the_first_tick() {
     let settings = TickSettings {
         time_warp: 1.0,
         liveness: 1e9,
+        limits: Limits::default(),
     };
     let (mut c, snapshots) = Coordinator::new(mission.clone(), settings, None);
     let (pose_tx, _rx) = register(&mut c, "usv-1", 1);

@@ -10,24 +10,82 @@ use tokio::sync::mpsc;
 
 use super::*;
 
+/// Serializes `doc` (on the thread that computed it) and hands it to
+/// `link`. A link that cannot keep up misses this command, counted; the
+/// next one supersedes it anyway.
+fn send_command(
+    link: &Link,
+    doc: &CommandDocument,
+    due: std::time::Instant,
+    written: &mpsc::Sender<()>,
+) {
+    let text = serde_json::to_string(&CoordinatorMessage::Command(doc.clone()))
+        .expect("commands serialize");
+    let sent = link.tx.try_send(Outgoing::Command {
+        text: Utf8Bytes::from(text),
+        due,
+        written: written.clone(),
+    });
+    if sent.is_err() {
+        metrics::counter!(crate::server::metrics::MESSAGES_REJECTED, "reason" => "link_full")
+            .increment(1);
+    }
+}
+
 impl Coordinator {
-    /// Takes every link's newest pose, if it has a new one.
+    /// Takes every link's newest pose, if it has a new one, judged
+    /// ([`judging`]).
     pub(super) fn collect_poses(&mut self) {
         let tick = self.tick;
-        for entry in self.vessels.values_mut() {
+        let bench = judging::Bench {
+            limits: &self.settings.limits,
+            region: &self.mission.region,
+            time: self.time(),
+            recorder: &self.recorder,
+        };
+        for (id, entry) in self.vessels.iter_mut() {
             if let Some(mut link) = entry.link.take() {
-                take_pose(entry, &mut link.poses, tick);
+                take_pose(id, entry, &mut link, tick, &bench);
                 entry.link = Some(link);
             }
         }
     }
 
-    pub(super) fn is_live(&self, entry: &Entry) -> bool {
+    /// Heard within the liveness window.
+    pub(super) fn is_heard(&self, entry: &Entry) -> bool {
         let window = (self.settings.liveness * self.mission.tick_hz).round() as u64;
-        entry.pose.is_some()
-            && entry
-                .last_seen_tick
-                .is_some_and(|t| self.tick - t <= window)
+        entry
+            .last_seen_tick
+            .is_some_and(|t| self.tick - t <= window)
+    }
+
+    /// In the partition: heard, with a believed pose, and not quarantined.
+    pub(super) fn is_live(&self, entry: &Entry) -> bool {
+        entry.pose.is_some() && !entry.standing.held() && self.is_heard(entry)
+    }
+
+    /// Each quarantined vessel that is still heard is told to hold, every
+    /// tick, so that a vessel whose poses are refused never drives on
+    /// its last command.
+    pub(super) fn hold_quarantined(&mut self, due: std::time::Instant, written: &mpsc::Sender<()>) {
+        let tick = self.tick;
+        let heard: Vec<String> = self
+            .vessels
+            .iter()
+            .filter(|(_, e)| e.standing.held() && e.link.is_some() && self.is_heard(e))
+            .map(|(id, _)| id.clone())
+            .collect();
+        for id in heard {
+            let entry = self.vessels.get_mut(&id).expect("listed above");
+            let (Some(doc), Some(link)) = (
+                entry.standing.hold_command(tick, entry.pose.as_ref()),
+                &entry.link,
+            ) else {
+                continue;
+            };
+            send_command(link, &doc, due, written);
+            entry.last_command = Some(doc);
+        }
     }
 
     /// Ids of the vessels in the partition, in id order.
@@ -59,6 +117,7 @@ impl Coordinator {
     ) -> Published {
         self.tick += advance;
         self.collect_poses();
+        self.hold_quarantined(due, &written);
         let time = self.tick as f64 / self.mission.tick_hz;
         let live = self.live_ids();
         self.note_liveness(time, &live);
@@ -129,21 +188,10 @@ impl Coordinator {
                 centroid: [c.x, c.y],
                 e: cmd.e,
                 psi_e: cmd.psi_e,
+                hold: None,
             };
             if let Some(link) = &entry.link {
-                let text = serde_json::to_string(&CoordinatorMessage::Command(doc.clone()))
-                    .expect("commands serialize");
-                // A link that cannot keep up misses this command; the next
-                // one supersedes it anyway.
-                let sent = link.tx.try_send(Outgoing::Command {
-                    text: Utf8Bytes::from(text),
-                    due,
-                    written: written.clone(),
-                });
-                if sent.is_err() {
-                    metrics::counter!(crate::server::metrics::MESSAGES_REJECTED, "reason" => "link_full")
-                        .increment(1);
-                }
+                send_command(link, &doc, due, &written);
             }
             entry.last_command = Some(doc);
             (cell, sc.intervened)
@@ -202,6 +250,8 @@ impl Coordinator {
         let connected = self.vessels.values().filter(|e| e.link.is_some()).count();
         metrics::gauge!(crate::server::metrics::VESSELS_CONNECTED).set(connected as f64);
         metrics::gauge!(crate::server::metrics::VESSELS_LIVE).set(live.len() as f64);
+        let held = self.vessels.values().filter(|e| e.standing.held()).count();
+        metrics::gauge!(crate::server::metrics::VESSELS_QUARANTINED).set(held as f64);
         metrics::gauge!(crate::server::metrics::COVERAGE_H)
             .set(evaluation.as_ref().map_or(0.0, |e| e.h));
     }
@@ -283,6 +333,7 @@ impl Coordinator {
                     last_command: e.last_command.clone(),
                     last_seen: e.last_seen_tick.map(|t| t as f64 / self.mission.tick_hz),
                     neighbours: e.neighbours,
+                    quarantine: e.standing.quarantine(),
                 }
             })
             .collect();

@@ -5,6 +5,7 @@
 //! with the page: wait for a condition, screenshot, click, drag, read the
 //! console.
 
+use std::os::unix::process::CommandExt;
 use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
@@ -31,11 +32,14 @@ pub fn browser() -> Result<(PathBuf, PathBuf), String> {
     Ok((driver, chrome))
 }
 
-/// The browser, or `None` after saying why the test is skipped; under
-/// `CI=true` a missing browser fails the test instead.
-pub fn browser_or_skip() -> Option<(PathBuf, PathBuf)> {
+/// The browser (chromedriver, chromium) and the machine
+/// ([`super::machine`]: Chromium keeps both cores busy rendering; taken
+/// before the test starts anything timed), or `None` after saying why the
+/// test is skipped; under `CI=true` a missing browser fails the test
+/// instead.
+pub async fn browser_or_skip() -> Option<(PathBuf, PathBuf, tokio::sync::MutexGuard<'static, ()>)> {
     match browser() {
-        Ok(found) => Some(found),
+        Ok((driver, chrome)) => Some((driver, chrome, super::machine::HEAVY.lock().await)),
         Err(why) if std::env::var("CI").as_deref() == Ok("true") => {
             panic!("{why}: CI must install chromium and chromium-driver")
         }
@@ -48,10 +52,19 @@ pub fn browser_or_skip() -> Option<(PathBuf, PathBuf)> {
     }
 }
 
+/// chromedriver, in a process group of its own with the browsers it
+/// starts: dropped, the whole group is killed, so a test that fails before
+/// it closes its session leaves no Chromium rendering beside the tests
+/// after it.
 pub struct Driver(Child);
 
 impl Drop for Driver {
     fn drop(&mut self) {
+        // The group's id is the driver's pid (`process_group(0)`).
+        let _ = Command::new("kill")
+            .args(["-KILL", "--", &format!("-{}", self.0.id())])
+            .stderr(Stdio::null())
+            .status();
         let _ = self.0.kill();
         let _ = self.0.wait();
     }
@@ -63,6 +76,7 @@ impl Drop for Driver {
 pub async fn start_driver(driver: &PathBuf) -> (Driver, u16) {
     use std::io::{BufRead, BufReader};
     let mut child = Command::new(driver)
+        .process_group(0)
         .arg("--port=0")
         .stdout(Stdio::piped())
         .stderr(Stdio::null())

@@ -20,6 +20,10 @@ use super::process::{KillOnDrop, signal};
 // ---------------------------------------------------------------------------
 // The fleet: the medium, the observers and the vessels.
 
+/// libfaketime (Debian's `faketime`): a process's wall clock moved, its
+/// monotonic clock left alone ([`Setup::clock_off`]).
+pub const FAKETIME: &str = "/usr/lib/x86_64-linux-gnu/faketime/libfaketime.so.1";
+
 pub struct Setup {
     /// Makes the fleet's name unique; names the test in messages.
     pub tag: String,
@@ -34,6 +38,9 @@ pub struct Setup {
     /// Whether the vessels start with the mission file (else they ask the
     /// fleet for it).
     pub mission_file: bool,
+    /// One vessel whose wall clock is off by this (libfaketime's offset,
+    /// e.g. `+2s`; its monotonic clock untouched).
+    pub clock_off: Option<(String, String)>,
 }
 
 impl Setup {
@@ -46,6 +53,7 @@ impl Setup {
             vessel_args: Vec::new(),
             shore: false,
             mission_file: true,
+            clock_off: None,
         }
     }
 
@@ -78,6 +86,7 @@ pub struct Fleet {
     pub started: f64,
     pub vessel_args: Vec<String>,
     pub mission_file: bool,
+    pub clock_off: Option<(String, String)>,
     /// The shore process's host, with [`Setup::shore`].
     pub shore: Option<usize>,
     // Fields drop in order: the processes before the medium.
@@ -94,12 +103,15 @@ pub struct Fleet {
     pub latest: BTreeMap<String, Value>,
     pub logs: tempfile::TempDir,
     pub medium: Medium,
+    /// The machine, until everything above is gone ([`super::machine`]).
+    _heavy: tokio::sync::MutexGuard<'static, ()>,
 }
 
 impl Fleet {
     /// The medium (hosts 0 … N, and N + 1 with a second observer) and the
     /// observers, ready; no vessel yet ([`Fleet::launch`]).
     pub fn new(setup: Setup, python: &Path) -> Fleet {
+        let heavy = super::machine::heavy();
         let hosts = N + setup.observers + usize::from(setup.shore);
         let medium = Medium::new(hosts);
         let name = format!("pf{}{}", std::process::id(), setup.tag);
@@ -116,6 +128,7 @@ impl Fleet {
             started: 0.0,
             vessel_args: setup.vessel_args,
             mission_file: setup.mission_file,
+            clock_off: setup.clock_off,
             shore: setup.shore.then_some(hosts - 1),
             vessels: Vec::new(),
             observers,
@@ -126,6 +139,7 @@ impl Fleet {
             latest: BTreeMap::new(),
             logs: tempfile::tempdir().unwrap(),
             medium,
+            _heavy: heavy,
         }
     }
 
@@ -151,6 +165,11 @@ impl Fleet {
                 .stdin(Stdio::null())
                 .stdout(Stdio::null())
                 .stderr(std::fs::File::create(&log).unwrap());
+            if let Some((_, offset)) = self.clock_off.as_ref().filter(|(id, _)| *id == p.id) {
+                cmd.env("LD_PRELOAD", FAKETIME)
+                    .env("FAKETIME", offset)
+                    .env("FAKETIME_DONT_FAKE_MONOTONIC", "1");
+            }
             let child = KillOnDrop(
                 cmd.spawn()
                     .unwrap_or_else(|e| panic!("{}: could not start {cmd:?}: {e}", p.id)),
@@ -221,11 +240,16 @@ impl Fleet {
         (1..=N).map(|i| format!("usv-{i}")).collect()
     }
 
-    /// The least mission time among the vessels, from the number of their
-    /// newest beacons (0 while one is unheard).
+    /// The least mission time among the running vessels (all before the
+    /// launch), from the number of their newest beacons (0 while one is
+    /// unheard).
     pub fn mission_time(&self) -> f64 {
-        Fleet::ids()
-            .iter()
+        let ids = if self.vessels.is_empty() {
+            Fleet::ids()
+        } else {
+            self.vessels.iter().map(|v| v.id.clone()).collect()
+        };
+        ids.iter()
             .map(|id| {
                 self.latest
                     .get(id)

@@ -3,7 +3,8 @@
 //! ([`inprocess`]), vessel links ([`link`]), positions placed by
 //! geographiclib ([`geo`]), and network namespaces as a radio medium with
 //! the Python observer of peer fleets ([`netns`], [`peer`]), and ArduPilot
-//! SITL boats with a ground station on each ([`sitl`]). Some helpers
+//! SITL boats with a ground station on each ([`sitl`]); the lock that
+//! keeps the heavy ones from running side by side ([`machine`]). Some helpers
 //! serve only tests that skip without their tool (ArduPilot, chromium,
 //! root), hence `dead_code` is allowed.
 #![allow(dead_code)]
@@ -13,6 +14,7 @@ pub mod fleet;
 pub mod geo;
 pub mod inprocess;
 pub mod link;
+pub mod machine;
 pub mod netns;
 pub mod paper;
 pub mod peer;

@@ -70,6 +70,22 @@ pub async fn mission(http: &reqwest::Client, addr: &str) -> MissionDocument {
     get_json(http, &format!("http://{addr}/api/v1/mission")).await
 }
 
+/// `GET /metrics` of the coordinator at `addr`, as text.
+pub async fn metrics(http: &reqwest::Client, addr: &str) -> String {
+    let response = http.get(format!("http://{addr}/metrics")).send().await;
+    response.unwrap().text().await.unwrap()
+}
+
+/// A metric's value in `/metrics` text: the sum of the samples on every
+/// line that starts with `name` (a name, or a name and the start of its
+/// labels) and contains `label`.
+pub fn metric_sum(text: &str, name: &str, label: &str) -> f64 {
+    text.lines()
+        .filter(|l| l.starts_with(name) && l.contains(label))
+        .filter_map(|l| l.rsplit(' ').next()?.parse::<f64>().ok())
+        .sum()
+}
+
 /// Polls `check` every 100 ms for up to `secs`.
 pub async fn eventually<F, Fut>(secs: u64, what: &str, mut check: F)
 where

@@ -27,8 +27,9 @@ use mavlink::{AsyncMavConnection, MavHeader};
 pub const SPEEDUP: u32 = 4;
 /// The mission's origin: ArduPilot's test field at Canberra.
 pub const ORIGIN: (f64, f64) = (-35.363261, 149.165230);
-/// One SITL fleet at a time: the two tests share two cores.
-pub static SITL: tokio::sync::Mutex<()> = tokio::sync::Mutex::const_new(());
+/// One SITL fleet at a time (their ports are fixed), and nothing else
+/// heavy beside it: the machine's lock ([`super::machine`]).
+pub static SITL: &tokio::sync::Mutex<()> = &super::machine::HEAVY;
 
 pub struct Ardupilot {
     pub binary: PathBuf,

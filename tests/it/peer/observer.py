@@ -8,18 +8,19 @@ one JSON object per line, flushed per line, to ``--out FILE``:
 
 - ``seacover/<fleet>/beacon/*`` (a CBOR map, RFC 8949):
   ``{"kind": "beacon", "key", "recv", "size", "beacon": {decoded map}}``, or
-  ``{"kind": "undecodable", "key", "size", "recv", "error"}`` when the payload
+  ``{"kind": "undecodable", "key", "size", "recv", "error", "hex"}`` when the payload
   is not CBOR or not a map. Byte strings in the map are written as hex text,
   non-finite floats as the strings "NaN", "inf", "-inf", other keys than
   text as their ``str``.
 - ``seacover/<fleet>/alive/*`` (liveliness, with history):
   ``{"kind": "alive" | "gone", "key", "recv"}``.
 - ``seacover/<fleet>/mission`` (a JSON document with an integer "revision"):
-  ``{"kind": "mission", "revision", "safety", "recv", "size"}`` (``safety``:
+  ``{"kind": "mission", "revision", "safety", "by", "recv", "size"}`` (``by``: who
+  made the revision, ``null`` when it does not say; ``safety``:
   the document's ``safety`` object, null without one; ``revision`` is null,
   with an ``error``, when the document is not such JSON); with
   ``--query-mission-every S``, a ``get`` on that key every S seconds writes
-  ``{"kind": "mission_reply", "revision", "safety", "from": <reply key>, "replier":
+  ``{"kind": "mission_reply", "revision", "safety", "by", "from": <reply key>, "replier":
   <Zenoh id of the answering session>, "recv", "size"}`` per reply (every
   queryable is asked, replies are not consolidated) (``{"kind": "mission_reply_error", "error", "recv"}``
   for an error reply).
@@ -136,7 +137,7 @@ def on_beacon(out):
                 raise ValueError(f"not a CBOR map but {type(value).__name__}")
         except Exception as e:  # noqa: BLE001 (any decoding failure is the finding)
             out.write({"kind": "undecodable", "key": key, "size": len(data),
-                       "recv": recv, "error": str(e)})
+                       "recv": recv, "error": str(e), "hex": data.hex()})
             return
         out.write({"kind": "beacon", "key": key, "recv": recv, "size": len(data),
                    "beacon": jsonable(value)})
@@ -172,12 +173,22 @@ def mission_safety(data):
     return jsonable(safety) if isinstance(safety, dict) else None
 
 
+def mission_field(data, name):
+    """The document's string field `name` (who made a revision, when; None without)."""
+    try:
+        doc = json.loads(data)
+    except Exception:  # noqa: BLE001 (mission_revision reports it)
+        return None
+    value = doc.get(name) if isinstance(doc, dict) else None
+    return value if isinstance(value, str) else None
+
+
 def on_mission(out):
     def callback(sample):
         data = sample.payload.to_bytes()
         revision, error = mission_revision(data)
         obj = {"kind": "mission", "revision": revision, "safety": mission_safety(data),
-               "recv": time.time(), "size": len(data)}
+               "by": mission_field(data, "by"), "recv": time.time(), "size": len(data)}
         if error:
             obj["error"] = error
         out.write(obj)
@@ -203,7 +214,7 @@ def query_mission(session, key, out, timeout):
             data = sample.payload.to_bytes()
             revision, error = mission_revision(data)
             obj = {"kind": "mission_reply", "revision": revision,
-                   "safety": mission_safety(data),
+                   "safety": mission_safety(data), "by": mission_field(data, "by"),
                    "from": str(sample.key_expr), "recv": recv, "size": len(data)}
             if error:
                 obj["error"] = error

@@ -24,6 +24,7 @@ pub mod lloyd;
 pub mod model;
 pub mod ned;
 pub mod observer;
+pub mod plausibility;
 pub mod reference;
 pub mod safety;
 

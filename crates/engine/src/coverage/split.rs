@@ -36,9 +36,11 @@
 //!    way keeps the separation from every vessel already given its delay,
 //!    moving or waiting (and, for two vessels that start or end closer than
 //!    that, no closer than they start or end). [`SplitPlan::closest`] is the
-//!    least distance between vessels of different groups on the way; where
-//!    no delay up to [`SplitParams::waits`] clears a vessel (after it has
-//!    been moved to the front of the order once) the plan is not
+//!    least distance between vessels of different groups on the way. With
+//!    [`SplitParams::starts_kept`] a way also keeps clear of where the
+//!    other group's vessels started, for a while, as if they had not left.
+//!    Where no delay up to [`SplitParams::waits`] clears a vessel (after it
+//!    has been moved to the front of the order once) the plan is not
 //!    [`SplitPlan::clear`], and the caller does not follow it.
 //!
 //! Pure and deterministic; it cannot fail once the inputs are valid (a
@@ -67,6 +69,12 @@ pub struct SplitParams {
     pub steps: usize,
     /// At most this many sweeps of pushes.
     pub sweeps: usize,
+    /// (radius [m], until [s]): every way keeps this far from where each
+    /// vessel of the other group started until this long into the plan
+    /// (or no nearer than it starts), whatever that vessel's own way:
+    /// a group that fell silent together may be wrecks that never leave.
+    /// `None`: only the vessels' ways count.
+    pub starts_kept: Option<(f64, f64)>,
 }
 
 impl SplitParams {
@@ -80,6 +88,7 @@ impl SplitParams {
             tolerance: 1e-3,
             steps: 2000,
             sweeps: 1000,
+            starts_kept: None,
         }
     }
 }
@@ -290,6 +299,14 @@ fn delays(
                     .min(norm2(way.a - other.a).sqrt())
                     .min(norm2(way.b - other.b).sqrt());
                 least_between(way, other) >= need - 1e-9
+            }) && params.starts_kept.is_none_or(|(radius, until)| {
+                // Until then the way runs from its start to where it is at
+                // `until`: that segment keeps clear of every start.
+                let reached = way.at(until);
+                start[1 - g].iter().all(|&q| {
+                    let need = radius.min(norm2(way.a - q).sqrt());
+                    norm2(closest_on_segment(way.a, reached, q) - q).sqrt() >= need - 1e-9
+                })
             })
         };
         let chosen = (0..=params.waits)
@@ -495,6 +512,43 @@ mod tests {
                 assert_eq!(plan.at(g, i, -1.0), plan.start[g][i]);
             }
         }
+    }
+
+    /// With the other group's starts kept: no way comes within the radius
+    /// of one before `until` (sampled), though the plan's ends are the same
+    /// and some way does come that near later (the ends trade water).
+    #[test]
+    fn starts_are_kept_clear_until_the_time_given() {
+        let region = square(false);
+        let risk = RiskField::new(1.0, vec![]).unwrap();
+        let a = [vessel(22.0, 50.0), vessel(78.0, 50.0)];
+        let b = [vessel(40.0, 45.0), vessel(60.0, 55.0)];
+        let free = plan(&region, &risk, [&a, &b], &SplitParams::both(9.0, 0.5)).unwrap();
+        let params = SplitParams {
+            starts_kept: Some((17.0, 60.0)),
+            ..SplitParams::both(9.0, 0.5)
+        };
+        let kept = plan(&region, &risk, [&a, &b], &params).unwrap();
+        assert!(kept.clear);
+        assert_eq!(kept.end, free.end);
+        let nearest = |p: &SplitPlan, from: f64, to: f64| {
+            let mut least = f64::INFINITY;
+            let steps = ((to - from) * 100.0).ceil() as usize;
+            for k in 0..=steps {
+                let tau = from + k as f64 / 100.0;
+                for g in 0..2 {
+                    for i in 0..2 {
+                        for q in &p.start[1 - g] {
+                            least = least.min(norm2(p.at(g, i, tau) - *q).sqrt());
+                        }
+                    }
+                }
+            }
+            least
+        };
+        assert!(nearest(&free, 0.0, 60.0) < 17.0, "the case needs the rule");
+        assert!(nearest(&kept, 0.0, 60.0) >= 17.0 - 1e-6);
+        assert!(nearest(&kept, 60.0, kept.duration) < 17.0);
     }
 
     /// Two vessels trading places head on (a straight way through the

@@ -32,6 +32,11 @@ pub struct Args {
         requires = "peer"
     )]
     fleet: String,
+    /// With --peer: cover even while hearing no other vessel (single-boat
+    /// work). Without it a vessel that hears nobody (the only one left, or
+    /// one whose credentials the fleet refuses) holds station and says so.
+    #[arg(long, requires = "peer")]
+    alone: bool,
     /// With --peer and --id: where the vessel starts, in the mission's
     /// local plane [m] and heading [rad]: X,Y or X,Y,PSI.
     #[arg(long, value_name = "X,Y[,PSI]", requires = "id", value_parser = parse_start)]
@@ -124,6 +129,7 @@ async fn peer(args: Args) -> anyhow::Result<()> {
     }
     let mut config = seacover::agent::peer::PeerConfig::new(args.fleet, args.zenoh.options())?;
     config.time_warp = args.time_warp;
+    config.alone = args.alone;
     // Beacons are aged in mission seconds.
     config.ageing.warp = args.time_warp;
     if let Some(path) = &args.mission {
@@ -154,6 +160,7 @@ async fn bridge(args: Args) -> anyhow::Result<()> {
         }
         let mut config =
             seacover::agent::peer::PeerConfig::new(args.fleet.clone(), args.zenoh.options())?;
+        config.alone = args.alone;
         if let Some(path) = &args.mission {
             config.mission = Some(seacover::agent::peer::mission_file(path)?);
         }
@@ -199,6 +206,6 @@ async fn simulate(args: Args) -> anyhow::Result<()> {
         seed: args.seed,
         token: args.token,
     };
-    seacover::agent::run_fleet(config, vessels, shell::stop_on_signal()).await;
+    seacover::agent::run_fleet(config, vessels, shell::stop_on_signal()).await?;
     Ok(())
 }

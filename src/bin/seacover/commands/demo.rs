@@ -28,6 +28,8 @@ pub async fn run(args: Args) -> anyhow::Result<()> {
     shell::check_warp(args.time_warp)?;
     let (listener, stop) = shell::listen(&args.bind).await?;
     let addr = listener.local_addr()?;
+    // Before the banner: a demo that cannot serve says so at once.
+    seacover::server::check_bind(addr, args.token.as_deref())?;
     let recording = args.record.as_ref().map(|dir| dir.display().to_string());
     let run = tokio::spawn(seacover::demo::run(
         listener,

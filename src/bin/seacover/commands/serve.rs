@@ -36,10 +36,21 @@ pub struct Args {
     /// Start a new recording file after this many MiB.
     #[arg(long, value_name = "MIB", default_value_t = 256)]
     record_max_mb: u64,
-    /// Start a new recording file after this many minutes (fractions
-    /// allowed: 0.5 is thirty seconds).
+    /// Start a new recording file after this many minutes of mission time
+    /// (fractions allowed: 0.5 is thirty seconds).
     #[arg(long, value_name = "MINUTES", default_value_t = 60.0, value_parser = positive_minutes)]
     record_max_minutes: f64,
+    /// Keep this much of the recordings, deleting the oldest files first:
+    /// mission time recorded (48h, 90m, 3d) or bytes on disk (5GB, 500MB,
+    /// 2GiB). Give it twice for both limits; either deletes. Only files
+    /// named as the recorder names them are deleted (docs/recording.md).
+    #[arg(
+        long,
+        value_name = "TIME|SIZE",
+        default_values = seacover::recorder::retention::DEFAULT_KEEP,
+        action = clap::ArgAction::Append
+    )]
+    record_keep: Vec<seacover::recorder::retention::Limit>,
     /// Join a peer fleet as a member (docs/peer.md): publish the mission
     /// to it (each accepted write a new revision) and show its vessels
     /// from their beacons; no commands are sent.
@@ -57,6 +68,12 @@ pub struct Args {
     /// this one over a routed network (LTE, VPN).
     #[arg(long, value_enum, default_value = "peer", requires = "peer")]
     zenoh_mode: ZenohMode,
+    /// With --peer: publish this coordinator's mission over the one the
+    /// fleet is working on. Without it a coordinator joining a fleet that
+    /// has a mission takes the fleet's (stored as its own), so that a
+    /// fresh shore cannot re-task a running fleet by accident.
+    #[arg(long, requires = "peer")]
+    replace_fleet_mission: bool,
     #[command(flatten)]
     zenoh: shell::ZenohArgs,
 }
@@ -86,6 +103,7 @@ pub async fn run(args: Args) -> anyhow::Result<()> {
             max_bytes: args.record_max_mb.saturating_mul(1024 * 1024),
             max_duration: std::time::Duration::try_from_secs_f64(args.record_max_minutes * 60.0)
                 .unwrap_or(std::time::Duration::MAX),
+            keep: seacover::recorder::retention::Keep::new(&args.record_keep),
         },
         wall_clock: true,
     });
@@ -117,6 +135,7 @@ pub async fn run(args: Args) -> anyhow::Result<()> {
             seacover::server::peer::PeerMember {
                 fleet: args.fleet.clone(),
                 zenoh,
+                replace: args.replace_fleet_mission,
             }
         }),
     };

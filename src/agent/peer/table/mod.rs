@@ -9,17 +9,21 @@
 //! `now_utc − t` at arrival clamped into [0, [`MAX_TRANSIT`]]: a sender
 //! whose clock runs ahead cannot make a beacon younger than its arrival,
 //! and one whose clock lags (or a beacon stuck in a queue) ages it at most
-//! by the clamp. Ordering uses `t` only between beacons of one sender,
-//! whose clock is one clock.
+//! by the clamp (under a time warp, by at most half of `stale_after`).
+//! Ordering uses `t` only between beacons of one sender, whose clock is
+//! one clock.
 //!
 //! ## Who is in the partition, and who is still an obstacle
 //! - **fresh** (age ≤ `stale_after`, 3 s by default): in the partition,
 //!   at its position extrapolated along its ground velocity by its age;
-//! - **silent** (older, up to `forget_after`, at least 60 s): no longer in
-//!   the partition (the others take its water), but still an obstacle for
-//!   the safety filter, at its last position with a radius that grows
-//!   with the silence ([`Silent::radius`]), and not trusted to keep its
-//!   half of any gap;
+//! - **silent** (older, up to `forget_after`, 120 s by default): no longer
+//!   in the partition (the others take its water), but still an obstacle
+//!   for the safety filter, at its last position with a radius that grows
+//!   with the silence up to the drift allowance ([`Silent::radius`]), and
+//!   not trusted to keep its half of any gap. A boat that falls silent is
+//!   a wreck, or alive and holding station (a vessel that hears no other
+//!   holds, and a group cut off follows the split's plan): either way it
+//!   does not go far, so the allowance is bounded;
 //! - forgotten after that.
 //!
 //! ## What a tick costs
@@ -36,12 +40,26 @@
 //! this process's own vessels, or whose motion since the id's previous
 //! beacon is faster than [`wire::MAX_SPEED`](super::wire::MAX_SPEED)) are
 //! dropped and counted by reason.
+//!
+//! ## Implausible neighbours
+//! Every other beacon is judged by the rules the coordinator judges poses
+//! by ([`plausibility`](crate::control::plausibility), with the
+//! coordinator's limits, the mission's region once one is held, and the
+//! sender's clock scaled by the time warp): a neighbour whose beacons fail
+//! them (farther outside the region than the margin, faster than a hull
+//! goes, its clock going back) is **quarantined**: kept, at its newest
+//! beacon, as traffic the safety filter keeps clear of without trusting it
+//! to keep its half of a gap, but never a neighbour of the partition,
+//! until its beacons agree again as long as the judge asks. Each failure
+//! is counted by the judge's reason, beside the refusals.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::time::Instant;
 
 use super::index::{Index, Key};
 use super::wire::{self, Refusal};
+use crate::control::plausibility::{Fault, Fix, Judge, Limits, Sample, Verdict};
+use crate::geometry::region::Region;
 use crate::protocol::peer::BeaconDocument;
 
 /// The most a beacon's transit counts for in its age [s].
@@ -59,15 +77,21 @@ pub struct Ageing {
     /// Speed a silent hull is assumed able to drift at, on top of its last
     /// ground speed [m/s].
     pub drift: f64,
+    /// The most a silent hull is assumed to have moved from its last
+    /// position [m]: a dead hull coasts to a stop within a few metres and
+    /// then drifts with the current (5 m is 25 s at 0.2 m/s); a live one
+    /// holds station (docs/peer.md, "What each loss does").
+    pub allowance: f64,
 }
 
 impl Default for Ageing {
     fn default() -> Self {
         Ageing {
             stale_after: 3.0,
-            forget_after: 60.0,
+            forget_after: 120.0,
             warp: 1.0,
             drift: 0.2,
+            allowance: 5.0,
         }
     }
 }
@@ -80,6 +104,8 @@ struct Heard {
     transit: f64,
     /// Where [`Index`] filed it.
     key: Key,
+    /// Its beacons judged for plausibility (an own vessel's are not).
+    judge: Judge,
 }
 
 /// An actuator as the wire carries it, as a map key: (k, β) bits.
@@ -99,13 +125,22 @@ pub struct Neighbour {
     pub beacon: BeaconDocument,
     /// `None` when fresh; the obstacle's radius when silent.
     pub silent: Option<Silent>,
+    /// Why its beacons are not believed, if they are not: traffic only.
+    pub quarantined: Option<Fault>,
+}
+
+impl Neighbour {
+    /// Whether it is a neighbour of the partition (fresh and believed).
+    pub fn in_partition(&self) -> bool {
+        self.silent.is_none() && self.quarantined.is_none()
+    }
 }
 
 /// A silent neighbour's uncertainty.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Silent {
     /// How far from its last position it may be [m]: its last ground speed
-    /// plus the drift, times the silence.
+    /// plus the drift, times the silence, up to the allowance.
     pub radius: f64,
 }
 
@@ -125,7 +160,12 @@ pub struct Table {
     /// widest of theirs).
     actuators: BTreeMap<Actuator, usize>,
     refused: BTreeMap<Refusal, u64>,
+    /// Beacons judged implausible, by the judge's reason.
+    implausible: BTreeMap<&'static str, u64>,
     received: u64,
+    /// The mission's region, once one is held: how far outside it a
+    /// neighbour may be is judged against it.
+    region: Option<Region>,
 }
 
 impl Table {
@@ -135,6 +175,11 @@ impl Table {
             own: own.into_iter().collect(),
             ..Table::default()
         }
+    }
+
+    /// The region beacons are judged against (the mission held).
+    pub fn set_region(&mut self, region: Option<Region>) {
+        self.region = region;
     }
 
     /// Claims `id` for one of this process's vessels.
@@ -151,10 +196,21 @@ impl Table {
         None
     }
 
+    /// Refused inputs and implausible beacons, by reason.
     pub fn refused(&self) -> BTreeMap<String, u64> {
+        let implausible = self.implausible.iter().map(|(r, n)| (*r, *n));
         self.refused
             .iter()
-            .map(|(r, n)| (r.name().to_string(), *n))
+            .map(|(r, n)| (r.name(), *n))
+            .chain(implausible)
+            .map(|(r, n)| (r.to_string(), n))
+            .collect()
+    }
+
+    /// Every vessel heard whose beacons are not believed, and why.
+    pub fn quarantined(&self) -> BTreeMap<String, String> {
+        self.heard()
+            .filter_map(|h| Some((h.beacon.id.clone(), h.judge.quarantined()?.to_string())))
             .collect()
     }
 
@@ -218,6 +274,10 @@ impl Table {
             }
         }
         let transit = (now_utc - beacon.t).clamp(0.0, MAX_TRANSIT);
+        let mut judge = known.map_or_else(Judge::new, |slot| self.slot(slot).judge.clone());
+        if !local {
+            self.judge(&mut judge, &beacon, ageing);
+        }
         *self.actuators.entry(actuator_of(&beacon)).or_default() += 1;
         let (slot, old) = match known {
             Some(slot) => {
@@ -241,8 +301,30 @@ impl Table {
             arrived: now,
             transit,
             key,
+            judge,
         });
         Some(rev)
+    }
+
+    /// Judges `beacon` with its sender's `judge`, counting a failure. The
+    /// sender's seconds are wall seconds: the hull covers warp × as much.
+    fn judge(&mut self, judge: &mut Judge, beacon: &BeaconDocument, ageing: &Ageing) {
+        let b = beacon;
+        let sample = Sample {
+            t: b.t * ageing.warp,
+            x: b.x,
+            y: b.y,
+            psi: b.psi,
+            u: b.u,
+            v: b.v,
+            r: b.r,
+        };
+        // The coordinator's limits (docs/api.md): one judgement for both.
+        let limits = Limits::default();
+        let verdict = judge.judge(&sample, Fix::Unreported, &limits, self.region.as_ref());
+        if let Verdict::Refused(fault) = verdict {
+            *self.implausible.entry(fault.code()).or_default() += 1;
+        }
     }
 
     fn drop_actuator(&mut self, b: &BeaconDocument) {
@@ -347,6 +429,15 @@ impl Table {
         out
     }
 
+    /// Whether any vessel but `me` has a fresh beacon (within
+    /// `stale_after`) that is believed: one that hears none is alone.
+    pub fn hears_another(&self, me: &str, now: Instant, ageing: &Ageing) -> bool {
+        self.ids.iter().any(|(id, &slot)| {
+            let h = self.slot(slot);
+            id != me && age(h, now, ageing) <= ageing.stale_after && h.judge.quarantined().is_none()
+        })
+    }
+
     /// Every vessel heard (own ones included) and its beacon's age [s of
     /// mission time].
     pub fn ages(&self, now: Instant, ageing: &Ageing) -> BTreeMap<String, f64> {
@@ -373,14 +464,16 @@ fn neighbour(h: &Heard, age: f64, ageing: &Ageing) -> Neighbour {
             age,
             beacon,
             silent: None,
+            quarantined: h.judge.quarantined(),
         }
     } else {
         Neighbour {
             age,
             beacon: b.clone(),
             silent: Some(Silent {
-                radius: (vx.hypot(vy) + ageing.drift) * age,
+                radius: ((vx.hypot(vy) + ageing.drift) * age).min(ageing.allowance),
             }),
+            quarantined: h.judge.quarantined(),
         }
     }
 }
@@ -392,272 +485,15 @@ fn may_be_older(arrived: Instant, now: Instant, ageing: &Ageing, limit: f64) -> 
 }
 
 /// A beacon's age in mission seconds (see the module doc).
+///
+/// Under a time warp the transit's share is at most half of `stale_after`
+/// of mission time: the clamp is a fraction of a second of wall time, and
+/// at warp 10 a neighbour whose clock lags by that much would otherwise be
+/// stale on arrival, which at warp 1 it is not.
 fn age(h: &Heard, now: Instant, ageing: &Ageing) -> f64 {
-    (now.saturating_duration_since(h.arrived).as_secs_f64() + h.transit) * ageing.warp
+    now.saturating_duration_since(h.arrived).as_secs_f64() * ageing.warp
+        + (h.transit * ageing.warp).min(ageing.stale_after / 2.0)
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use std::time::Duration;
-
-    /// A beacon of the paper's actuator at (x, y), heading `psi`, at `u`
-    /// m/s.
-    fn doc(id: &str, t: f64, (x, y): (f64, f64), psi: f64, u: f64) -> BeaconDocument {
-        BeaconDocument {
-            id: id.into(),
-            seq: 1,
-            t,
-            x,
-            y,
-            psi,
-            u,
-            v: 0.0,
-            r: 0.0,
-            k: 0.5,
-            beta: 0.001,
-            rev: 0,
-            controlled: true,
-        }
-    }
-
-    /// Heading east at 1 m/s on y = 0.
-    fn beacon(id: &str, t: f64, x: f64) -> Vec<u8> {
-        wire::encode(&doc(id, t, (x, 0.0), 0.0, 1.0))
-    }
-
-    #[test]
-    fn only_the_neighbours_that_can_matter_are_handed_out() {
-        let ageing = Ageing::default();
-        let mut table = Table::new("bay", ["me".to_string()]);
-        let t0 = Instant::now();
-        let utc = 1.8e9;
-        // Beacons at x = 0, 100, 200, 300 m, each moving east at 1 m/s.
-        for (i, x) in [0.0, 100.0, 200.0, 300.0].into_iter().enumerate() {
-            let id = format!("v{i}");
-            table.offer(
-                &format!("seacover/bay/beacon/{id}"),
-                &beacon(&id, utc, x),
-                false,
-                t0,
-                utc,
-                &ageing,
-            );
-        }
-        let ids = |n: Vec<Neighbour>| n.into_iter().map(|n| n.beacon.id).collect::<Vec<_>>();
-        let at = |secs| t0 + Duration::from_secs(secs);
-        let all = ids(table.neighbours("me", at(1), &ageing));
-        assert_eq!(all, ["v0", "v1", "v2", "v3"]);
-        // 150 m from x = 0: v0 and v1; v2's beacon (200 m, 1 s old, 1 m/s)
-        // is 200 > 150 + 1.
-        let near = ids(table.neighbours_near("me", (0.0, 0.0), |_, _| 150.0, at(1), &ageing));
-        assert_eq!(near, ["v0", "v1"]);
-        // Silent for 10 s its radius (1.2 m/s × 10 s = 12 m) counts too:
-        // 200 ≤ 190 + 12.
-        let near = ids(table.neighbours_near("me", (0.0, 0.0), |_, _| 190.0, at(10), &ageing));
-        assert_eq!(near, ["v0", "v1", "v2"]);
-        // The same as `neighbours` for the ones handed out.
-        let near = table.neighbours_near("me", (0.0, 0.0), |_, _| 150.0, at(2), &ageing);
-        assert_eq!(near[..], table.neighbours("me", at(2), &ageing)[..2]);
-    }
-
-    /// The indexes change nothing: in a large table of fresh, silent and
-    /// forgotten beacons, some re-filed after moving, the neighbours handed
-    /// out are those the module doc's rule picks from every beacon.
-    #[test]
-    fn the_indexed_query_hands_out_what_a_walk_over_every_beacon_would() {
-        use rand::{RngExt, SeedableRng};
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
-        let ageing = Ageing::default();
-        let mut table = Table::new("bay", ["me".to_string()]);
-        let t0 = Instant::now();
-        let utc = 1.8e9;
-        // id → (x, y, ground speed, seconds after t0 its beacon arrived).
-        let mut sent = BTreeMap::new();
-        let send = |table: &mut Table,
-                    sent: &mut BTreeMap<String, (f64, f64, f64, f64)>,
-                    id: String,
-                    x: f64,
-                    y: f64,
-                    speed: f64,
-                    at: f64| {
-            let doc = doc(&id, utc + at, (x, y), 0.3, speed);
-            let key = format!("seacover/bay/beacon/{id}");
-            let arrived = t0 + Duration::from_secs_f64(at);
-            table.offer(&key, &wire::encode(&doc), false, arrived, utc + at, &ageing);
-            sent.insert(id, (x, y, speed, at));
-        };
-        for i in 0..600 {
-            // A third heard within the last 4 s, the rest over 80 s.
-            let at = if i % 3 == 0 {
-                rng.random_range(76.0..80.0)
-            } else {
-                rng.random_range(0.0..80.0)
-            };
-            let (x, y) = (rng.random_range(0.0..2000.0), rng.random_range(0.0..2000.0));
-            send(
-                &mut table,
-                &mut sent,
-                format!("v{i:03}"),
-                x,
-                y,
-                rng.random_range(0.0..3.0),
-                at,
-            );
-        }
-        // Some move on and are heard again (filed in another square).
-        for i in (0..600).step_by(7) {
-            let id = format!("v{i:03}");
-            let (x, y, speed, at) = sent[&id];
-            let later = at.max(79.0) + 0.5;
-            let step = 3.0 * (later - at);
-            send(&mut table, &mut sent, id, x + step, y - step, speed, later);
-        }
-        let now = t0 + Duration::from_secs(80);
-        let mut handed_out = 0;
-        for centre in [(1000.0, 1000.0), (40.0, 1900.0), (-300.0, 500.0)] {
-            for radius in [50.0, 150.0, 400.0] {
-                let got: Vec<String> = table
-                    .neighbours_near("me", centre, |_, _| radius, now, &ageing)
-                    .into_iter()
-                    .map(|n| n.beacon.id)
-                    .collect();
-                let want: Vec<String> = sent
-                    .iter()
-                    .filter(|(_, v)| {
-                        let &(x, y, speed, at) = *v;
-                        let age = 80.0 - at;
-                        let moved = if age <= ageing.stale_after {
-                            speed * age
-                        } else {
-                            (speed + ageing.drift) * age
-                        };
-                        age <= ageing.forget_after
-                            && (x - centre.0).hypot(y - centre.1) <= radius + moved
-                    })
-                    .map(|(id, _)| id.clone())
-                    .collect();
-                handed_out += want.len();
-                assert_eq!(got, want, "about {centre:?} within {radius} m");
-            }
-        }
-        // Not a comparison of empty lists.
-        assert!(handed_out > 100, "{handed_out}");
-    }
-
-    #[test]
-    fn fresh_then_silent_then_forgotten() {
-        let ageing = Ageing::default();
-        let mut table = Table::new("bay", ["me".to_string()]);
-        let t0 = Instant::now();
-        let utc = 1.8e9;
-        table.offer(
-            "seacover/bay/beacon/a",
-            &beacon("a", utc, 10.0),
-            false,
-            t0,
-            utc,
-            &ageing,
-        );
-        let n = table.neighbours("me", t0 + Duration::from_secs(1), &ageing);
-        assert_eq!(n.len(), 1);
-        assert!(n[0].silent.is_none());
-        assert!(
-            (n[0].beacon.x - 11.0).abs() < 1e-3,
-            "extrapolated: {}",
-            n[0].beacon.x
-        );
-        let n = table.neighbours("me", t0 + Duration::from_secs(10), &ageing);
-        let radius = n[0].silent.unwrap().radius;
-        assert!((radius - 12.0).abs() < 1e-3, "{radius}");
-        assert_eq!(n[0].beacon.x, 10.0);
-        assert!(
-            table
-                .neighbours("me", t0 + Duration::from_secs(61), &ageing)
-                .is_empty()
-        );
-    }
-
-    #[test]
-    fn a_sender_clock_ahead_or_behind_changes_the_age_by_the_clamp_at_most() {
-        let ageing = Ageing::default();
-        let mut table = Table::new("bay", []);
-        let t0 = Instant::now();
-        // Stamped 5 s in the future, and 5 s in the past.
-        table.offer(
-            "seacover/bay/beacon/a",
-            &beacon("a", 1.8e9 + 5.0, 0.0),
-            false,
-            t0,
-            1.8e9,
-            &ageing,
-        );
-        table.offer(
-            "seacover/bay/beacon/b",
-            &beacon("b", 1.8e9 - 5.0, 0.0),
-            false,
-            t0,
-            1.8e9,
-            &ageing,
-        );
-        let ages = table.ages(t0, &ageing);
-        assert_eq!(ages["a"], 0.0);
-        assert_eq!(ages["b"], MAX_TRANSIT);
-    }
-
-    #[test]
-    fn refusals_are_counted_and_change_nothing() {
-        let ageing = Ageing::default();
-        let mut table = Table::new("bay", ["me".to_string()]);
-        let t0 = Instant::now();
-        let utc = 1.8e9;
-        table.offer(
-            "seacover/bay/beacon/a",
-            &beacon("a", utc, 0.0),
-            false,
-            t0,
-            utc,
-            &ageing,
-        );
-        // Someone else claims "a" 500 m away a second later; another claims "me".
-        table.offer(
-            "seacover/bay/beacon/a",
-            &beacon("a", utc + 1.0, 500.0),
-            false,
-            t0,
-            utc,
-            &ageing,
-        );
-        table.offer(
-            "seacover/bay/beacon/me",
-            &beacon("me", utc, 0.0),
-            false,
-            t0,
-            utc,
-            &ageing,
-        );
-        table.offer(
-            "seacover/sea/beacon/b",
-            &beacon("b", utc, 0.0),
-            false,
-            t0,
-            utc,
-            &ageing,
-        );
-        table.offer(
-            "seacover/bay/beacon/c",
-            b"not cbor",
-            false,
-            t0,
-            utc,
-            &ageing,
-        );
-        let refused = table.refused();
-        assert_eq!(refused["id_conflict"], 2);
-        assert_eq!(refused["other_fleet"], 1);
-        assert_eq!(refused["undecodable"], 1);
-        let n = table.neighbours("me", t0, &ageing);
-        assert_eq!(n.len(), 1);
-        assert_eq!(n[0].beacon.x, 0.0);
-    }
-}
+mod tests;
