@@ -387,3 +387,67 @@ proptest! {
         }
     }
 }
+
+/// Found by `masses_sum_to_h_and_centroids_are_in_their_hulls` in CI: a
+/// 0.2 m² sliver at the tip of a spike, 40 m from the only risk object
+/// (σ = 3 m, so the density there is e^-94 of its peak), had its centroid
+/// 40 m away from its hull.
+#[test]
+fn a_sliver_far_from_the_only_risk_keeps_its_centroid_in_its_hull() {
+    let c = Case {
+        shell: vec![
+            p(70.0, 50.0),
+            p(67.32050807568878, 60.0),
+            p(60.0, 67.32050807568876),
+            p(50.0, 70.0),
+            p(40.0, 67.32050807568878),
+            p(12.449724029329964, 71.67966193981107),
+            p(30.0, 50.0),
+            p(3.568199508116102, 23.192587487051853),
+            p(39.99999999999999, 32.679491924311236),
+            p(49.99999999999999, 30.0),
+            p(60.0, 32.67949192431123),
+            p(67.32050807568876, 39.99999999999999),
+        ],
+        holes: vec![],
+        base: 0.0,
+        objects: vec![RiskObject {
+            center: p(0.0, 64.93356221627576),
+            alpha: 0.5,
+            sigma: 3.0,
+        }],
+        vessels: [
+            (0.0, 62.719602237797545),
+            (13.777744765792901, 38.121881451789186),
+            (3.638619713777431, 40.92862979495928),
+        ]
+        .iter()
+        .map(|&(x, y)| Vessel {
+            position: p(x, y),
+            k: 0.5,
+            beta: 0.001,
+        })
+        .collect(),
+    };
+    let (region, _, _, e) = c.run(&Options::default());
+    let (_, _, _, reference) = c.run(&Options {
+        tolerance: Tolerance::adaptive(1e-10),
+        ..Options::default()
+    });
+    for (i, (cell, slow)) in e.cells.iter().zip(&reference.cells).enumerate() {
+        let vertices: Vec<Point> = cell
+            .geometry
+            .pieces(&region)
+            .0
+            .iter()
+            .flat_map(|poly| poly.exterior().coords().copied().collect::<Vec<_>>())
+            .collect();
+        assert!(
+            in_hull(cell.centroid, &vertices),
+            "cell {i}: {:?} (reference {:?}), area {}",
+            cell.centroid,
+            slow.centroid,
+            cell.area
+        );
+    }
+}

@@ -36,6 +36,7 @@ use rstar::primitives::GeomWithData;
 
 use super::fleet::{Fleet, Vessel};
 use crate::geometry::arcs::Piece;
+use crate::geometry::bridges::without_bridges;
 #[cfg(test)]
 use crate::geometry::cross;
 use crate::geometry::{
@@ -396,6 +397,7 @@ fn clip_to_region(mut cell: ConvexPolygon, region: &Region) -> CellGeometry {
         .map(|r| cell.clip_ring(r))
         .filter(|r| r.len() >= 3 && ring_signed_area(r) != 0.0)
         .collect();
+    let rings = without_bridges(&rings, &cell.edge_lines());
     let area: f64 = rings.iter().map(|r| ring_signed_area(r)).sum();
     if area <= 0.0 {
         CellGeometry::Empty

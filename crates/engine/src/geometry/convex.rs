@@ -5,6 +5,7 @@
 //! is why cells are built here rather than with general boolean operations.
 //! Vertices are counter-clockwise; an empty vertex list is the empty polygon.
 
+use super::bridges::Line;
 use super::{Point, cross, dot, ring_signed_area};
 
 /// A convex polygon, counter-clockwise, without the closing vertex.
@@ -60,20 +61,35 @@ impl ConvexPolygon {
     /// For a non-convex ring the result can contain zero-width "bridges"
     /// between pieces. They enclose no area and every boundary integral over
     /// them cancels, so the result is exact as an oriented chain.
+    /// [`without_bridges`](super::bridges::without_bridges) removes them
+    /// before the chain is integrated.
     pub fn clip_ring(&self, ring: &[Point]) -> Vec<Point> {
-        let n = self.vertices.len();
         let mut out = ring.to_vec();
-        for i in 0..n {
-            let (a, b) = (self.vertices[i], self.vertices[(i + 1) % n]);
-            let e = b - a;
-            // Inside is to the left of a→b: cross(e, x − a) ≥ 0.
-            let normal = Point { x: e.y, y: -e.x };
-            out = clip_ring(&out, normal, dot(normal, a));
+        for line in self.edge_lines() {
+            out = clip_ring(&out, line.normal, line.offset);
             if out.is_empty() {
                 break;
             }
         }
         out
+    }
+
+    /// The lines of the edges, each as the half-plane `normal · x ≤ offset`
+    /// that holds the polygon.
+    pub fn edge_lines(&self) -> Vec<Line> {
+        let n = self.vertices.len();
+        (0..n)
+            .map(|i| {
+                let (a, b) = (self.vertices[i], self.vertices[(i + 1) % n]);
+                let e = b - a;
+                // Inside is to the left of a→b: cross(e, x − a) ≥ 0.
+                let normal = Point { x: e.y, y: -e.x };
+                Line {
+                    normal,
+                    offset: dot(normal, a),
+                }
+            })
+            .collect()
     }
 
     /// Area (non-negative).

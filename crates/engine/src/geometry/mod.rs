@@ -14,6 +14,7 @@
 //! (boolean operations, triangulation) without conversion.
 
 pub mod arcs;
+pub mod bridges;
 pub mod convex;
 pub mod geodesy;
 pub mod grid;
