@@ -14,7 +14,7 @@
 //! The literal law steers the bow. With the paper's vessel (m11 = m22, sway
 //! time constant m22/d22 ≈ 67 s) turning the bow barely turns the velocity:
 //! the hull behaves like a puck whose only thrust is along the bow, and the
-//! fleet drifts out of the region (SPEC §2; `docs/reproducing-the-paper.md`
+//! fleet drifts out of the region (`docs/reproducing-the-paper.md`
 //! measures it). This mode treats the velocity over ground w as the thing to
 //! control:
 //! - desired ground velocity w_d = S(E) ê with the paper's speed profile
@@ -100,7 +100,8 @@ impl GuidanceMode {
     }
 }
 
-/// Guidance gains; the paper gives none, these are SPEC §2's defaults.
+/// Guidance gains. The paper gives none; these defaults are the ones
+/// `docs/reproducing-the-paper.md` measures.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct GuidanceGains {
     pub mode: GuidanceMode,
@@ -216,7 +217,7 @@ struct Line {
 const LINE_GAP: f64 = 1.0;
 
 /// The command period assumed before two commands have given it [s]
-/// (SPEC's tick).
+/// (the coordinator's default tick, 10 Hz).
 const FIRST_PERIOD: f64 = 0.1;
 
 /// Guidance state of one vessel (the filters need history).

@@ -1,4 +1,4 @@
-//! The vessel side of SPEC §2 (paper sections 3–5): 3-DOF dynamics with
+//! The vessel side of the paper (its sections 3–5): 3-DOF dynamics with
 //! actuator saturation, disturbance models, the finite-time disturbance
 //! observer, the robust velocity-tracking controller, and the guidance laws
 //! that turn a centroid into desired surge speed and yaw rate.

@@ -204,7 +204,8 @@ mod tests {
     #[test]
     fn turning_with_equal_masses_rotates_the_body_not_the_velocity() {
         // m11 = m22 and no damping: the ground velocity is conserved while
-        // the hull spins (the "known weakness" of SPEC §2, in its pure form).
+        // the hull spins: why the literal law fails on the paper's vessel
+        // (docs/reproducing-the-paper.md), in its pure form.
         let p = VesselParams {
             d11: 0.0,
             d22: 0.0,

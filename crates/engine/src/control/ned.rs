@@ -1,4 +1,5 @@
-//! MAVLink's frames ⇄ seacover's, in one place (SPEC §5).
+//! MAVLink's frames ⇄ seacover's, in one place (`docs/ardupilot.md`, "The
+//! bridge").
 //!
 //! MAVLink (and ArduPilot) use north-east-down: yaw ψ_NED clockwise from
 //! north, yaw rate positive turning to starboard, body y to starboard.

@@ -1,5 +1,5 @@
-//! Finite-time disturbance observer (paper eq. 30 with the corrected Δ of
-//! SPEC §2), one super-twisting loop per channel:
+//! Finite-time disturbance observer (paper eq. 30, its Δ written so that Ω
+//! obeys the super-twisting law below), one super-twisting loop per channel:
 //!
 //! ```text
 //! Ω = M (V̄ − V)
