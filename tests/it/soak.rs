@@ -35,7 +35,7 @@ use std::time::{Duration, Instant};
 use serde_json::Value;
 
 use crate::common::process::KillOnDrop;
-use crate::common::server::{metric_sum, metrics, start};
+use crate::common::server::{get_json, metric_sum, metrics, start};
 
 const BIN: &str = env!("CARGO_BIN_EXE_seacover");
 const HOUR: f64 = 3600.0;
@@ -231,14 +231,7 @@ async fn run_day(dir: &Path, records: &Path) -> Day {
     loop {
         tokio::time::sleep(Duration::from_millis(250)).await;
         assert!(server.0.try_wait().unwrap().is_none(), "serve exited");
-        let doc: Value = http
-            .get(&coverage)
-            .send()
-            .await
-            .unwrap()
-            .json()
-            .await
-            .unwrap();
+        let doc: Value = get_json(&http, &coverage).await;
         let t = doc["time"].as_f64().unwrap();
         let (files, disk) = recordings(records);
         samples.push(Sample {

@@ -148,20 +148,28 @@ fn the_indexed_query_hands_out_what_a_walk_over_every_beacon_would() {
     assert!(handed_out > 100, "{handed_out}");
 }
 
-#[test]
-fn fresh_then_silent_then_forgotten() {
+/// A table for "me" that has heard vessel "a" at x on y = 0 (heading
+/// east at 1 m/s), with the default ageing: the table, the ageing, and the
+/// monotonic and UTC times of that beacon.
+fn heard_a(x: f64) -> (Table, Ageing, Instant, f64) {
     let ageing = Ageing::default();
     let mut table = Table::new("bay", ["me".to_string()]);
     let t0 = Instant::now();
     let utc = 1.8e9;
     table.offer(
         "seacover/bay/beacon/a",
-        &beacon("a", utc, 10.0),
+        &beacon("a", utc, x),
         false,
         t0,
         utc,
         &ageing,
     );
+    (table, ageing, t0, utc)
+}
+
+#[test]
+fn fresh_then_silent_then_forgotten() {
+    let (mut table, ageing, t0, _) = heard_a(10.0);
     let n = table.neighbours("me", t0 + Duration::from_secs(1), &ageing);
     assert_eq!(n.len(), 1);
     assert!(n[0].silent.is_none());
@@ -227,18 +235,7 @@ fn a_sender_clock_ahead_or_behind_changes_the_age_by_the_clamp_at_most() {
 
 #[test]
 fn refusals_are_counted_and_change_nothing() {
-    let ageing = Ageing::default();
-    let mut table = Table::new("bay", ["me".to_string()]);
-    let t0 = Instant::now();
-    let utc = 1.8e9;
-    table.offer(
-        "seacover/bay/beacon/a",
-        &beacon("a", utc, 0.0),
-        false,
-        t0,
-        utc,
-        &ageing,
-    );
+    let (mut table, ageing, t0, utc) = heard_a(0.0);
     // Someone else claims "a" 500 m away a second later; another claims "me".
     table.offer(
         "seacover/bay/beacon/a",
