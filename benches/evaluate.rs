@@ -42,7 +42,7 @@ fn group_of(c: &mut Criterion, group: &str, names: &[&str], options: &Options) {
 
 fn evaluate(c: &mut Criterion) {
     // The mixed-β fleets (curved cells) beside their equal-β twins: the
-    // same vessels, half of them at β = 0.004 (issue 31: ≤ 3× the time).
+    // same vessels, half of them at β = 0.004 (target: ≤ 3× the time, docs/performance.md).
     let names = [
         "paper",
         "paper-mixed",

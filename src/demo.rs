@@ -17,7 +17,7 @@ use crate::control::model::VesselParams;
 use crate::recorder::{RecorderConfig, Target};
 use crate::server::{ServeConfig, ServeError, serve};
 
-/// Agents' pose rate [Hz] (SPEC §3).
+/// Agents' pose rate [Hz] (docs/api.md).
 const POSE_HZ: f64 = 20.0;
 
 /// Runs the coordinator on `listener` and the eight vessels of the paper's

@@ -15,7 +15,7 @@ export function colourOf(index) {
   return `hsl(${(index * 137.508) % 360} 70% 62%)`;
 }
 
-/** Φ at (x, y): base plus Gaussian objects (SPEC §2, eq. 5). */
+/** Φ at (x, y): base plus Gaussian objects (paper eq. 5). */
 export function density(risk, x, y) {
   let phi = risk.base;
   for (const o of risk.objects) {

@@ -1,4 +1,4 @@
-//! One vessel's link to the coordinator (SPEC §3, `/api/v1/vessels/link`),
+//! One vessel's link to the coordinator (docs/api.md, `/api/v1/vessels/link`),
 //! shared by the simulated vessels and the MAVLink bridge.
 //!
 //! The vessel side publishes its newest pose in a `watch` and reads
@@ -122,7 +122,7 @@ pub enum HandshakeError {
     Transport(#[source] tokio_tungstenite::tungstenite::Error),
 }
 
-/// The message of an HTTP error's body: SPEC §3's `{"error": {"message"}}`,
+/// The message of an HTTP error's body: docs/api.md's `{"error": {"message"}}`,
 /// or the body as text.
 fn http_message(body: Option<&[u8]>) -> String {
     let body = body.unwrap_or_default();

@@ -1,4 +1,4 @@
-//! `seacover agent`: simulated vessels on real links (SPEC §3).
+//! `seacover agent`: simulated vessels on real links (docs/api.md).
 //!
 //! Each vessel is one task with its own WebSocket link. On board it runs the
 //! dynamics (RK4, 1 ms), the disturbance, the observer and the controller in
@@ -219,7 +219,7 @@ async fn run_vessel(
             Some(m) = incoming.recv() => match m {
                 link::Inbound::Command(c) => onboard.command = Some((c, onboard.t)),
                 // The simulated hull keeps its own rule for an aging
-                // command (SPEC §3): it needs no word of the loss.
+                // command (docs/api.md): it needs no word of the loss.
                 link::Inbound::Lost => {}
             },
         }

@@ -1,4 +1,4 @@
-//! `seacover bench load`: a load benchmark of a running coordinator (SPEC §4:
+//! `seacover bench load`: a load benchmark of a running coordinator (docs/performance.md:
 //! 1000 vessel links at 20 Hz on loopback, none dropped, command p99 ≤ 20 ms,
 //! ≤ 1 core, ≤ 64 KiB per connected vessel).
 //!

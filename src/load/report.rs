@@ -1,4 +1,4 @@
-//! The load benchmark's report: its figures, the SPEC §4 targets they are
+//! The load benchmark's report: its figures, the targets of docs/performance.md they are
 //! held to, and the table `seacover bench load` prints.
 
 use std::fmt;
@@ -75,7 +75,7 @@ pub struct CoordinatorFigures {
     pub command_delay_ms: Latency,
 }
 
-/// One SPEC §4 target and whether this run met it (`null`: not measured).
+/// One target of docs/performance.md and whether this run met it (`null`: not measured).
 #[derive(Debug, Clone, Serialize)]
 pub struct TargetCheck {
     pub what: String,
@@ -177,7 +177,7 @@ impl fmt::Display for LoadReport {
             self.time_warp
         )?;
         writeln!(f)?;
-        writeln!(f, "| figure | value | target (SPEC §4) | met |")?;
+        writeln!(f, "| figure | value | target | met |")?;
         writeln!(f, "| --- | --- | --- | --- |")?;
         let target = |what: &str| self.targets.iter().find(|t| t.what == what);
         let row = |f: &mut fmt::Formatter<'_>, name: &str, value: String, what: &str| {

@@ -160,7 +160,7 @@ pub struct EventRecord {
     /// The vessel concerned, when there is one.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub vessel: Option<String>,
-    /// An error code (SPEC §3), for rejections.
+    /// An error code (docs/api.md), for rejections.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub code: Option<String>,
     /// The remote address, for links and rejections.

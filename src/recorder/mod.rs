@@ -1,4 +1,4 @@
-//! The mission recorder: every run as MCAP (issue 16), written on a thread
+//! The mission recorder: every run as MCAP (docs/recording.md), written on a thread
 //! of its own.
 //!
 //! The coordinator (and `seacover sim`) hand a [`Recorder`] what happened —

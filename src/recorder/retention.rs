@@ -1,4 +1,4 @@
-//! Which recordings a directory keeps (`serve --record-keep`, issue 41):
+//! Which recordings a directory keeps (`serve --record-keep`, docs/recording.md):
 //! the limits an operator sets ([`Limit`], [`Keep`]) and the writer's list
 //! of the files it may delete ([`Shelf`]), oldest first.
 //!

@@ -1,5 +1,5 @@
 //! The HTTP edge's one error type and its single `IntoResponse`:
-//! `{"error": {"code", "message"}}` with the status SPEC §3 assigns.
+//! `{"error": {"code", "message"}}` with the status docs/api.md assigns.
 
 use axum::Json;
 use axum::http::StatusCode;
@@ -133,7 +133,7 @@ impl IntoResponse for ApiError {
     }
 }
 
-/// The answer to a path no route has: SPEC §3's JSON error, not an empty
+/// The answer to a path no route has: the JSON error of docs/api.md, not an empty
 /// body.
 pub async fn not_found(uri: axum::http::Uri) -> ApiError {
     ApiError::NotFound(format!("no such path: {}", uri.path()))

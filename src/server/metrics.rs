@@ -17,7 +17,7 @@
 //! at each render and, on the thread [`handle`] starts, every
 //! [`UPKEEP_EVERY`]. Without that thread a coordinator nobody scraped kept
 //! every tick's duration and every command's delay: 7 MB per mission hour
-//! with 8 vessels at time warp 20 (docs/performance.md, issue 41).
+//! with 8 vessels at time warp 20 (docs/performance.md).
 
 use std::sync::OnceLock;
 

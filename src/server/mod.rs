@@ -1,4 +1,4 @@
-//! `seacover serve`: the coordinator (SPEC §3). Router and start-up here; the
+//! `seacover serve`: the coordinator (docs/api.md). Router and start-up here; the
 //! tick task and its state in [`coordinator`], WebSocket endpoints in [`ws`], REST
 //! in [`api`], the HTTP error type in [`error`].
 //!
@@ -108,7 +108,7 @@ pub enum ServeError {
     },
 }
 
-/// Every route of SPEC §3.
+/// Every route of docs/api.md.
 pub fn router(app: AppState) -> Router {
     let writes = Router::new()
         .route("/api/v1/mission/origin", put(api::put_origin))

@@ -1,5 +1,5 @@
 //! `seacover serve --peer`: the coordinator as a member of a peer fleet
-//! (SPEC §6). It publishes the mission (each accepted REST write becomes a
+//! (docs/peer.md). It publishes the mission (each accepted REST write becomes a
 //! new revision), answers the fleet's queries for it, and shows the fleet
 //! from its beacons: every vessel it hears is registered with the tick task
 //! as a vessel whose link is this member, so the dashboard, `GET

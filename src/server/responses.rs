@@ -1,6 +1,6 @@
 //! The error responses of the OpenAPI document, one component each, shared
 //! by the handlers' `#[utoipa::path]` annotations ([`super::api`]) and the
-//! document itself ([`super::openapi`]): every one is SPEC §3's
+//! document itself ([`super::openapi`]): every one is docs/api.md's
 //! `{"error": {"code", "message"}}` ([`crate::protocol::ErrorDocument`]).
 
 use utoipa::ToResponse;

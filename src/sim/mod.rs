@@ -1,5 +1,5 @@
 //! `seacover sim`: the whole closed loop in one process, no network,
-//! deterministic for a seed (SPEC §1, issue 3).
+//! deterministic for a seed (docs/reproducing-the-paper.md).
 //!
 //! Dynamics, observer and controller run at the dynamics step (1 kHz by
 //! default); the coverage engine and guidance run at the coordinator's tick

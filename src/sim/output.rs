@@ -8,7 +8,7 @@ use serde::Serialize;
 
 use super::{Config, Run};
 
-/// `summary.json`, with exactly the keys of issue 3.
+/// `summary.json`, with exactly the keys docs/reproducing-the-paper.md lists.
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct Summary {
     pub guidance: String,
@@ -99,7 +99,7 @@ fn lloyd_e_max(config: &Config, tick: &super::Tick) -> f64 {
 }
 
 /// `safety.json`: what the safety watch measured (`docs/safety.md`). Kept
-/// apart from `summary.json`, whose keys are fixed by issue 3.
+/// apart from `summary.json`, whose keys are fixed.
 ///
 /// Each count of episodes comes twice: `collisions`, `incursions`, … count
 /// those that began during the run; `…_at_start` those already under way at

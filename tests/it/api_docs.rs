@@ -690,7 +690,7 @@ async fn the_real_server_speaks_as_documented() {
     server.stop().await;
 }
 
-// The peer wire (SPEC §6, docs/peer.md): its JSON Schema, generated here
+// The peer wire (docs/peer.md): its JSON Schema, generated here
 // from the protocol types, and the worked beacon example, made by the real
 // encoder.
 
@@ -745,7 +745,7 @@ fn peer_wire_schema() -> String {
     let (_, decoded) = beacon_example();
     defs["BeaconDocument"]["examples"] = json!([decoded]);
     let description = format!(
-        "What the members of a peer fleet (SPEC §6, docs/peer.md) put on Eclipse Zenoh; \
+        "What the members of a peer fleet (docs/peer.md) put on Eclipse Zenoh; \
          `<fleet>` is the fleet's name and `<id>` a vessel's id (each `[A-Za-z0-9_.-]{{1,64}}`). \
          `seacover/<fleet>/beacon/<id>`: a `BeaconDocument` in CBOR. \
          `seacover/<fleet>/alive/<id>`: a liveliness token (no payload), held while vessel <id> \

@@ -1,5 +1,5 @@
 //! A fleet with different actuator reaches β through the real `seacover
-//! serve` binary (issue 31): vessels declare their own actuator in their
+//! serve` binary: vessels declare their own actuator in their
 //! hello, the coordinator partitions them together, and every output that
 //! carries a cell — `GET /api/v1/coverage`, `GET /api/v1/vessels`, the
 //! dashboard stream, the stateless evaluation and `coverage.geojson` —

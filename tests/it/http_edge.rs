@@ -1,4 +1,4 @@
-//! The HTTP edge as a client sees it: every error is SPEC §3's JSON (an
+//! The HTTP edge as a client sees it: every error is docs/api.md's JSON (an
 //! unknown route's 404, a wrong method's 405 with `Allow`), unknown fields
 //! and values that cannot matter are refused naming the request's own
 //! fields, a 401 says which scheme to use, and a client that reuses its

@@ -1,4 +1,4 @@
-//! The peer-fleet namespace test b (issue 30 §4): the coordinator as a
+//! The peer-fleet namespace test b (docs/peer.md): the coordinator as a
 //! member of a peer fleet, lost and restarted.
 //!
 //! `seacover serve --peer` runs in a host of its own on the radio medium

@@ -1,4 +1,4 @@
-//! Who may join a peer fleet (issue 30 §3, test f): three `seacover agent
+//! Who may join a peer fleet (docs/peer.md, test f): three `seacover agent
 //! --peer` vessels with the fleet's credentials (`seacover fleet
 //! credentials`, Zenoh's user/password authentication), each in its own
 //! network namespace; an independent Python observer with the credentials;

@@ -1,4 +1,4 @@
-//! Recording (issue 16): real `seacover serve` and `seacover agent`
+//! Recording (docs/recording.md): real `seacover serve` and `seacover agent`
 //! processes on port 0, the files they leave read back by seacover's own
 //! reader and by an independent one (Foxglove's Python `mcap` package,
 //! `tests/python/check_recording.py`, from the venv scripts/test makes:

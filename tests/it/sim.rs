@@ -124,7 +124,7 @@ fn runs_are_deterministic_for_a_seed() {
     }
 }
 
-/// Issue 17's figures on the paper scenario, 200 s, with `args` (preset,
+/// The paper's figures (docs/reproducing-the-paper.md) on its scenario, 200 s, with `args` (preset,
 /// disturbance, safety): after 20 s every vessel tracks the reference its
 /// controller is given to within 0.05 (m/s, rad/s), and the coordinator's
 /// command itself (tracking error plus how far that reference lags the
@@ -185,8 +185,9 @@ fn the_claims_hold_for_the_otter_and_other_disturbances() {
 
 #[test]
 fn the_literal_law_fails_on_the_papers_vessel_but_not_with_sway_damping() {
-    // SPEC §2 "known weakness": with m22/d22 ≈ 67 s the bow's heading barely
-    // steers the velocity. The Otter's sway is damped in ≈ 1.6 s.
+    // The literal law's weakness (docs/reproducing-the-paper.md): with
+    // m22/d22 ≈ 67 s the bow's heading barely steers the velocity. The
+    // Otter's sway is damped in ≈ 1.6 s.
     let (a, b) = (tmp("literal-paper"), tmp("literal-otter"));
     let paper = sim(
         &a,

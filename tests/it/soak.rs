@@ -1,4 +1,4 @@
-//! A day at sea in bounded memory (issue 41): real processes run through
+//! A day at sea in bounded memory (docs/performance.md): real processes run through
 //! a day of mission time at a time warp, and their resident memory and
 //! recordings are sampled from outside (`/proc/PID/status`, the recordings
 //! directory) as it passes.

@@ -1,4 +1,4 @@
-//! Issue 17, networked: the vessels of `seacover demo` ([`seacover::demo`],
+//! The paper's tracking claims, networked: the vessels of `seacover demo` ([`seacover::demo`],
 //! what the binary runs: the coordinator and eight simulated vessels on
 //! loopback WebSocket links, time warp 1, the paper scenario) follow the
 //! commands they are sent. (In-process rather than the binary: the tests'

@@ -1,6 +1,6 @@
 //! The wire form of cells: their figures, their outline as polygons that
 //! every client and GIS reads, and, for a curved cell (vessels with
-//! different reaches β, SPEC §2), its exact boundary of segments and arcs.
+//! different reaches β, paper eq. 6), its exact boundary of segments and arcs.
 
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};

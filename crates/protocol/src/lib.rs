@@ -1,5 +1,5 @@
 //! Serde types of everything that crosses the wire or the command line
-//! (SPEC §3), and nothing else: no validation, no behaviour. Validation lives
+//! (docs/api.md), and nothing else: no validation, no behaviour. Validation lives
 //! in the mission layer above (`mission::scenario`), so the same document is
 //! checked the same way by the CLI and by the server.
 //!

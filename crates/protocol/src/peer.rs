@@ -1,4 +1,4 @@
-//! The wire of a fleet without a coordinator (SPEC §6): what the vessels of
+//! The wire of a fleet without a coordinator (docs/peer.md): what the vessels of
 //! a peer fleet, and a coordinator that joins it, put on Eclipse Zenoh.
 //! Shapes only; the CBOR encoding and every value rule live in
 //! `agent::peer::wire`.

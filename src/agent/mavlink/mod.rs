@@ -1,5 +1,5 @@
 //! `seacover agent --mavlink ENDPOINT …`: puts real autopilots (ArduPilot
-//! Rover boats) on the coordinator's vessel links (SPEC §5, issue 15 §2).
+//! Rover boats) on the coordinator's vessel links (docs/ardupilot.md).
 //!
 //! Tasks:
 //! - one per endpoint ([`endpoint`]): keeps the MAVLink connection open

@@ -3,7 +3,7 @@
 //! bridge's tasks feed messages in and send what comes back, so every rule
 //! below is testable without a vehicle.
 //!
-//! Rules (issue 15 §2, docs/ardupilot.md):
+//! Rules (docs/ardupilot.md):
 //! - a pose is made from each GLOBAL_POSITION_INT with the newest ATTITUDE:
 //!   x, y through the mission's origin, ψ, u, v, r converted in
 //!   [`crate::control::ned`]; positions that are not finite, out of range or

@@ -1,4 +1,4 @@
-//! `seacover agent --peer`: a fleet that needs no coordinator (SPEC §6).
+//! `seacover agent --peer`: a fleet that needs no coordinator (docs/peer.md).
 //!
 //! Every vessel runs the coverage loop on board with its neighbours only,
 //! over Eclipse Zenoh in peer mode: it publishes its beacon 5 times a

@@ -1,5 +1,5 @@
 //! An independent reference for [`curved`](super::curved)'s integrals over
-//! [`arcs`](crate::geometry::arcs)' cells (issue 31), by vertical slabs: it
+//! [`arcs`](crate::geometry::arcs)' cells (mixed β), by vertical slabs: it
 //! shares nothing with the boundary and Green's theorem. Test-only.
 //!
 //! **Method.** At a fixed x the cell of vessel i is a set of y from the
@@ -576,7 +576,7 @@ mod tests {
         rerun_centroid: f64,
     }
 
-    /// Issue 31's accuracy check: 240 random mixed-β fleets of 3–10 vessels
+    /// The accuracy check of mixed-β cells: 240 random fleets of 3–10 vessels
     /// (β from {0.001, 0.002, 0.004} or, one vessel in four, uniform in
     /// 0.0008–0.005; k 0.3–1.5) in the three regions. Every cell, with two
     /// integrands (a risk object of σ 5–20 m times the actuator, and the

@@ -1,4 +1,4 @@
-//! Risk density Φ(q) = φ0 + Σ_j α_j exp(−‖q − s_j‖² / (2 σ_j²))  (SPEC §2, eq. 5).
+//! Risk density Φ(q) = φ0 + Σ_j α_j exp(−‖q − s_j‖² / (2 σ_j²))  (paper eq. 5).
 //!
 //! Objects sit in an R-tree so that a cell only looks at the objects that can
 //! change its integrals by more than a fraction of the tolerance; far objects

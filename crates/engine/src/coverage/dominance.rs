@@ -1,4 +1,4 @@
-//! Where one vessel's actuator beats another's, f_i(q) ≥ f_j(q) (SPEC §2,
+//! Where one vessel's actuator beats another's, f_i(q) ≥ f_j(q) (paper
 //! eq. 6), for any k and β: the bound a generalized Voronoi cell gets from
 //! each other vessel ([`Bound`]).
 //!

@@ -1,5 +1,5 @@
 //! One full evaluation: partition, then mass, centroid, area and gradient of
-//! every cell, and H(P) = Σ_i M_i (SPEC §2 "Cell figures").
+//! every cell, and H(P) = Σ_i M_i (paper eq. 7–9).
 //!
 //! Definitions for the edge cases (all documented results, never NaN):
 //! - empty cell (vessel outside Q with no share of it, or dominated by other

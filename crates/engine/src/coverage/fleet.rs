@@ -1,5 +1,5 @@
 //! Vessels and their actuator performance f_i(q) = k_i exp(−β_i ‖q − p_i‖²)
-//! (SPEC §2, eq. 4).
+//! (paper eq. 4).
 //!
 //! Invariant of a [`Fleet`]: at least one vessel, every k_i, β_i positive and
 //! finite, positions within range. With a common β the partition f_i ≥ f_j

@@ -1,5 +1,5 @@
 //! The generalized Voronoi partition of a fleet with different reaches β
-//! (SPEC §2, eq. 6 in general): each cell is the region intersected with
+//! (paper eq. 6 in general): each cell is the region intersected with
 //! the bounds the other vessels impose ([`dominance`]: half-planes between
 //! equal β, discs and disc complements otherwise), as the oriented
 //! boundary of segments and arcs of [`geometry::arcs`].

@@ -1,6 +1,6 @@
-//! The coverage engine of SPEC §2: risk density Φ, actuator performance f_i,
-//! the generalized Voronoi (power) partition, cell mass and centroid, the
-//! metric H(P) and its gradient.
+//! The coverage engine of the paper (sections 2–3): risk density Φ,
+//! actuator performance f_i, the generalized Voronoi (power) partition,
+//! cell mass and centroid, the metric H(P) and its gradient.
 //!
 //! Invariants:
 //! - pure and deterministic: no I/O, no threads, no clocks, no randomness;

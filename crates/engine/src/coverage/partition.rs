@@ -1,5 +1,5 @@
 //! The generalized Voronoi partition V_i = { q ∈ Q : f_i(q) ≥ f_j(q) ∀ j }
-//! (SPEC §2, eq. 6) as power cells clipped to the region.
+//! (paper eq. 6) as power cells clipped to the region.
 //!
 //! With one β, f_i ≥ f_j ⟺ ‖q − p_i‖² − ln k_i / β ≤ ‖q − p_j‖² − ln k_j / β, a
 //! power diagram. In coordinates x = q − p_i and with d = p_j − p_i the

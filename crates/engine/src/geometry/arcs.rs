@@ -1,6 +1,6 @@
 //! Regions bounded by segments and circular arcs: the task region cut by
 //! half-planes, discs and disc complements, as a generalized Voronoi cell
-//! with different actuator reaches is (SPEC §2, eq. 6 with β_i ≠ β_j).
+//! with different actuator reaches is (paper eq. 6 with β_i ≠ β_j).
 //!
 //! The result is the cell's **oriented boundary**, a list of [`Piece`]s
 //! with the cell on the left of each, not assembled into rings. Green's

@@ -1,4 +1,5 @@
-//! WGS84 latitude and longitude ⇄ the mission's local plane (SPEC §5).
+//! WGS84 latitude and longitude ⇄ the mission's local plane (docs/api.md,
+//! geo-referenced missions).
 //!
 //! A geo-referenced mission has an origin (WGS84 degrees); its plane is the
 //! East-North-Up tangent plane at that origin, x east and y north in metres,

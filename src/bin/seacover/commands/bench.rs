@@ -6,7 +6,7 @@ use crate::shell;
 pub enum Command {
     /// Open N vessel links to a coordinator, report poses at a rate, and
     /// measure links held, commands, latency and the coordinator's CPU and
-    /// memory (SPEC §4 targets).
+    /// memory (the targets of docs/performance.md).
     Load(LoadArgs),
 }
 

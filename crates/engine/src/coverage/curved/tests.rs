@@ -207,7 +207,7 @@ fn reference_integrals(cell: &MultiPolygon<f64>, g: &Gaussian) -> [f64; 3] {
 /// and crescent areas of the arcs module's tests, which ours match to
 /// 1e-10, by up to 5e-7 of a cell, so its masses are good to ~1e-5, not
 /// to the 1e-6 the engine is held to on straight cells (a finer
-/// reference is still to be built; issue 31).
+/// reference is still to be built).
 #[test]
 fn curved_cells_tile_the_region_and_match_an_independent_reference() {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
