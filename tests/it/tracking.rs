@@ -112,12 +112,48 @@ async fn the_demo_fleet_follows_its_commands() {
     // Against the coordinator's command itself: |u − u_d| ≤ |u − u_ref| +
     // |u_ref − u_d|. Each vessel declared what it can follow, so its
     // governor holds nothing much back.
+    let why = || commands_to(&recording, &lag.at.0);
+    println!("the vessel of the largest lag: {}", why());
     assert!(
         error.u + lag.u < BOUND,
-        "surge against the command: {error:?} + {lag:?}"
+        "surge against the command: {error:?} + {lag:?}; {}",
+        why()
     );
     assert!(
         error.r + lag.r < BOUND,
-        "yaw rate against the command: {error:?} + {lag:?}"
+        "yaw rate against the command: {error:?} + {lag:?}; {}",
+        why()
     );
+}
+
+/// What `vessel` was sent, for a failure's message: how many commands,
+/// the longest gap between two (by the recorder's clock), and the holds
+/// among them with their reasons and ticks. A command lag comes from the
+/// command line jumping; a late command (the vessel then keeps station on
+/// its own after 1 s) and a hold are the two ways it does.
+fn commands_to(recording: &Recording, vessel: &str) -> String {
+    let mut times = Vec::new();
+    let mut holds = Vec::new();
+    for m in recording.messages(&|t| t == messages::COMMAND) {
+        let m = m.unwrap();
+        let c: messages::CommandRecord = serde_json::from_slice(&m.data).unwrap();
+        if c.vessel == vessel {
+            times.push(m.log_time);
+            if let Some(reason) = c.command.hold {
+                holds.push((c.tick, reason));
+            }
+        }
+    }
+    let (gap, after) = times
+        .windows(2)
+        .map(|w| (w[1].saturating_sub(w[0]), w[0]))
+        .max()
+        .unwrap_or_default();
+    let start = times.first().copied().unwrap_or_default();
+    format!(
+        "{vessel}: {} commands, longest gap {:.2} s from {:.2} s after the first; holds {holds:?}",
+        times.len(),
+        gap as f64 * 1e-9,
+        after.saturating_sub(start) as f64 * 1e-9
+    )
 }
