@@ -220,6 +220,63 @@ fn the_literal_law_fails_on_the_papers_vessel_but_not_with_sway_damping() {
     }
 }
 
+/// The last `window` seconds of a run's `timeseries.csv`: (mean |r|,
+/// mean |u|, largest E, the last H).
+fn settled(out: &Path, window: f64) -> (f64, f64, f64, f64) {
+    let text = std::fs::read_to_string(out.join("timeseries.csv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (t, u, r, e, h) = (col("t"), col("u"), col("r"), col("E"), col("H"));
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| {
+            l.split(',')
+                .enumerate()
+                .map(|(i, x)| if i == 1 { 0.0 } else { x.parse().unwrap() })
+                .collect()
+        })
+        .collect();
+    let end = rows.last().unwrap()[t];
+    let last: Vec<&Vec<f64>> = rows.iter().filter(|x| x[t] >= end - window).collect();
+    let mean = |c: usize| last.iter().map(|x| x[c].abs()).sum::<f64>() / last.len() as f64;
+    let e_max = last.iter().map(|x| x[e]).fold(0.0, f64::max);
+    (mean(r), mean(u), e_max, rows.last().unwrap()[h])
+}
+
+#[test]
+fn converged_vessels_keep_station_without_turning_inside_the_hold_radius() {
+    // Without station keeping a converged vessel chases a goal centimetres
+    // away and turns for ever; with it (`--hold-radius`, experimental, see
+    // docs/reproducing-the-paper.md) it stops turning and H is as it was.
+    // 600 s: with it the fleet takes longer than the paper's 200 s to settle.
+    for preset in ["paper", "otter"] {
+        let (a, b) = (
+            tmp(&format!("hold-none-{preset}")),
+            tmp(&format!("hold-on-{preset}")),
+        );
+        let common = ["--preset", preset, "--duration", "600", "--no-figures"];
+        sim(&a, &[&common[..], &["--hold-radius", "0"]].concat());
+        sim(&b, &[&common[..], &["--hold-radius", "0.2"]].concat());
+        let (r0, _, _, h0) = settled(&a, 100.0);
+        let (r, u, e, h) = settled(&b, 100.0);
+        println!(
+            "{preset}, last 100 s: without: mean |r| {r0:.4}, H {h0:.2}; with: mean |r| {r:.4}, \
+             mean |u| {u:.4}, E_max {e:.3}, H {h:.2}"
+        );
+        assert!(
+            r0 > 0.02,
+            "{preset}: without station keeping the fleet already sits still: {r0}"
+        );
+        assert!(r < 0.02, "{preset}: mean |r| {r}");
+        assert!(u < 0.05, "{preset}: mean |u| {u}");
+        assert!(e < 0.5, "{preset}: E_max {e}");
+        assert!((h - h0).abs() < 1e-3 * h0, "{preset}: H {h} against {h0}");
+        for d in [a, b] {
+            std::fs::remove_dir_all(d).unwrap();
+        }
+    }
+}
+
 #[test]
 fn bad_arguments_exit_2() {
     for args in [

@@ -122,6 +122,8 @@ pub fn guidance_gains(doc: &GuidanceDocument) -> Result<GuidanceGains, MissionEr
         k_u2: doc.k_u2,
         b2: doc.b2,
         arrival_radius: doc.arrival_radius,
+        // Station keeping is not yet a mission setting (docs/api.md).
+        hold_radius: 0.0,
         max_speed: doc.max_speed,
         max_yaw_rate: doc.max_yaw_rate,
         filter_time: doc.filter_time,

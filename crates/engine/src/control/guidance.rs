@@ -65,6 +65,7 @@
 //! do not notice (`docs/reproducing-the-paper.md`).
 
 use super::model::State;
+use super::station::{Order, Phase, YIELD};
 use super::{sigmoid, wrap};
 
 /// 3x² − 2x³ on [0, 1], 0 below and 1 above: a C¹ switch.
@@ -113,6 +114,10 @@ pub struct GuidanceGains {
     pub b2: f64,
     /// Inside this distance of the centroid the vessel holds station [m].
     pub arrival_radius: f64,
+    /// Inside this distance of the goal a `course` vessel stops turning and
+    /// keeps station, until it is twice as far ([`station`](super::station))
+    /// [m]; 0 (the default): never. Experimental: see that module.
+    pub hold_radius: f64,
     /// Speed cap of the `course` mode [m/s].
     pub max_speed: f64,
     /// Yaw-rate cap of the `course` mode [rad/s]: the outer loop must ask
@@ -145,6 +150,7 @@ impl Default for GuidanceGains {
             k_u2: 0.1,
             b2: 1.0,
             arrival_radius: 0.05,
+            hold_radius: 0.0,
             max_speed: 2.0,
             max_yaw_rate: 1.0,
             filter_time: 0.5,
@@ -239,6 +245,8 @@ pub struct Guidance {
     pub ahead_only: bool,
     /// What the vessel declared it can follow.
     pub agility: Agility,
+    /// Where the `course` mode is in keeping station.
+    station: Phase,
 }
 
 /// The surge an ahead-only vessel keeps while its bow comes round, so that
@@ -262,6 +270,7 @@ impl Guidance {
             astern: false,
             ahead_only: false,
             agility: Agility::UNDECLARED,
+            station: Phase::Free,
         }
     }
 
@@ -395,6 +404,64 @@ impl Guidance {
         (u, r, u_dot, r_dot, cut)
     }
 
+    /// The `course` law's raw output for the desired ground velocity `wd`
+    /// (see the module doc): (u_d, r_d, ψ_e, u̇_d).
+    fn course(&mut self, state: &State, wd: (f64, f64)) -> (f64, f64, f64, Option<f64>) {
+        let g = self.gains;
+        let yaw = |err: f64| g.k_r1 * (sigmoid(g.b1 * err) - 0.5) + g.k_r2 * err;
+        let w = state.ground_velocity();
+        let dw = (wd.0 - w.0, wd.1 - w.1);
+        const FADE: f64 = 0.1; // m/s
+        let (bow_x, bow_y) = (state.psi.cos(), state.psi.sin());
+        let u_d = wd.0 * bow_x + wd.1 * bow_y;
+        // Steer along Δw, blended with w_d so that the target turns
+        // continuously as Δw vanishes.
+        let target = (dw.0 + 0.25 * wd.0, dw.1 + 0.25 * wd.1);
+        let need = target.0.hypot(target.1);
+        let beam = wd.1 * bow_x - wd.0 * bow_y;
+        if need == 0.0 {
+            (u_d, 0.0, 0.0, Some(0.0))
+        } else {
+            let ahead = wrap(target.1.atan2(target.0) - state.psi);
+            // Thrust astern rather than turn more than a right angle,
+            // with hysteresis so the choice does not flicker.
+            let flip = |a: f64| wrap(a + std::f64::consts::PI);
+            let current = if self.astern { flip(ahead) } else { ahead };
+            if current.abs() > ASTERN_SWITCH && !self.ahead_only {
+                self.astern = !self.astern;
+            }
+            let psi_e = if self.astern { flip(ahead) } else { ahead };
+            // Turning matters as much as the velocity change it
+            // serves: fade the yaw command out as that change
+            // vanishes, rather than switching it off.
+            let r_d = (yaw(psi_e) * (need / FADE).min(1.0)).clamp(-g.max_yaw_rate, g.max_yaw_rate);
+            // Track only as far as the bow points the right way; else
+            // coast (u_d = u at its natural rate v r), so no thrust
+            // turns the velocity along with the hull.
+            let alpha = psi_e.cos().max(0.0).powi(2);
+            let (u, v) = (state.vel.x, state.vel.y);
+            let u_d = alpha * u_d + (1.0 - alpha) * u;
+            let u_d_dot = alpha * r_d * beam + (1.0 - alpha) * v * r_d;
+            if self.ahead_only {
+                // A hull that cannot go astern mostly cannot turn on
+                // the spot either: its rudder or outboard bites only
+                // with water flowing past. Coasting at rest, it would
+                // never come round (ArduPilot's boats turn at
+                // 0.03 rad/s so); keep steerage way instead, no more
+                // than the speed wanted, so a vessel at its goal
+                // stays put.
+                let steerage = STEERAGE.min(wd.0.hypot(wd.1)) * (1.0 - alpha);
+                if u_d < steerage {
+                    (steerage, r_d, psi_e, Some(0.0))
+                } else {
+                    (u_d, r_d, psi_e, Some(u_d_dot))
+                }
+            } else {
+                (u_d, r_d, psi_e, Some(u_d_dot))
+            }
+        }
+    }
+
     fn steer(
         &mut self,
         t: f64,
@@ -438,61 +505,21 @@ impl Guidance {
                 }
             }
             GuidanceMode::Course => {
-                let wd = match w_d {
-                    Some(wd) => wd,
-                    None => self.desired_velocity(state, centroid, e),
-                };
-                let w = state.ground_velocity();
-                let dw = (wd.0 - w.0, wd.1 - w.1);
-                const FADE: f64 = 0.1; // m/s
-                let (bow_x, bow_y) = (state.psi.cos(), state.psi.sin());
-                let u_d = wd.0 * bow_x + wd.1 * bow_y;
-                // Steer along Δw, blended with w_d so that the target turns
-                // continuously as Δw vanishes.
-                let target = (dw.0 + 0.25 * wd.0, dw.1 + 0.25 * wd.1);
-                let need = target.0.hypot(target.1);
-                let beam = wd.1 * bow_x - wd.0 * bow_y;
-                if need == 0.0 {
-                    (u_d, 0.0, 0.0, Some(0.0))
-                } else {
-                    let ahead = wrap(target.1.atan2(target.0) - state.psi);
-                    // Thrust astern rather than turn more than a right angle,
-                    // with hysteresis so the choice does not flicker.
-                    let flip = |a: f64| wrap(a + std::f64::consts::PI);
-                    let current = if self.astern { flip(ahead) } else { ahead };
-                    if current.abs() > ASTERN_SWITCH && !self.ahead_only {
-                        self.astern = !self.astern;
-                    }
-                    let psi_e = if self.astern { flip(ahead) } else { ahead };
-                    // Turning matters as much as the velocity change it
-                    // serves: fade the yaw command out as that change
-                    // vanishes, rather than switching it off.
-                    let r_d = (yaw(psi_e) * (need / FADE).min(1.0))
-                        .clamp(-g.max_yaw_rate, g.max_yaw_rate);
-                    // Track only as far as the bow points the right way; else
-                    // coast (u_d = u at its natural rate v r), so no thrust
-                    // turns the velocity along with the hull.
-                    let alpha = psi_e.cos().max(0.0).powi(2);
-                    let (u, v) = (state.vel.x, state.vel.y);
-                    let u_d = alpha * u_d + (1.0 - alpha) * u;
-                    let u_d_dot = alpha * r_d * beam + (1.0 - alpha) * v * r_d;
-                    if self.ahead_only {
-                        // A hull that cannot go astern mostly cannot turn on
-                        // the spot either: its rudder or outboard bites only
-                        // with water flowing past. Coasting at rest, it would
-                        // never come round (ArduPilot's boats turn at
-                        // 0.03 rad/s so); keep steerage way instead, no more
-                        // than the speed wanted, so a vessel at its goal
-                        // stays put.
-                        let steerage = STEERAGE.min(wd.0.hypot(wd.1)) * (1.0 - alpha);
-                        if u_d < steerage {
-                            (steerage, r_d, psi_e, Some(0.0))
-                        } else {
-                            (u_d, r_d, psi_e, Some(u_d_dot))
-                        }
-                    } else {
-                        (u_d, r_d, psi_e, Some(u_d_dot))
-                    }
+                let desired = self.desired_velocity(state, centroid, e);
+                let wd = w_d.unwrap_or(desired);
+                let yielding = (wd.0 - desired.0).hypot(wd.1 - desired.1) > YIELD;
+                let order = self.station.advance(
+                    g.hold_radius,
+                    state,
+                    centroid,
+                    e,
+                    yielding,
+                    self.ahead_only,
+                );
+                match order {
+                    Order::Steer => self.course(state, wd),
+                    Order::Brake => self.course(state, (0.0, 0.0)),
+                    Order::Hold { u, r, u_dot, psi_e } => (u, r, psi_e, Some(u_dot)),
                 }
             }
         };

@@ -9,8 +9,9 @@
 //!
 //! Code map: [`model`] parameters, presets and RK4 dynamics; [`disturbance`]
 //! τ_d(t); [`observer`] eq. 30; [`controller`] eq. 33–35; [`guidance`]
-//! eq. 10–13 and the converging `course` mode, [`lag`] how far it trails a
-//! moving goal; [`lloyd`] the single-integrator
+//! eq. 10–13 and the converging `course` mode, [`station`] its station
+//! keeping on arrival (experimental), [`lag`] how far it trails a moving
+//! goal; [`lloyd`] the single-integrator
 //! baseline; [`safety`] the tick's safe motion among islands and vessels
 //! (goal, route, [`barrier`] filter over [`halfplanes`], tracking).
 
@@ -27,6 +28,7 @@ pub mod observer;
 pub mod plausibility;
 pub mod reference;
 pub mod safety;
+pub mod station;
 
 use std::f64::consts::PI;
 

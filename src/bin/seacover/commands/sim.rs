@@ -45,6 +45,10 @@ pub struct Args {
     /// Guidance law: `course` (converges) or `paper` (the literal law).
     #[arg(long, value_enum, default_value = "course")]
     guidance: Guidance,
+    /// Inside this distance of its centroid a `course` vessel stops turning
+    /// and keeps station (until twice as far); 0 never does.
+    #[arg(long, value_name = "M", default_value_t = seacover::control::guidance::GuidanceGains::default().hold_radius)]
+    hold_radius: f64,
     /// Vessel preset: `paper` or `otter`.
     #[arg(long, value_enum, default_value = "paper")]
     preset: Preset,
@@ -147,6 +151,11 @@ fn simulate(args: &Args) -> anyhow::Result<()> {
         Guidance::Course => GuidanceMode::Course,
         Guidance::Paper => GuidanceMode::Paper,
     };
+    ensure!(
+        args.hold_radius.is_finite() && args.hold_radius >= 0.0,
+        "--hold-radius must be a finite number >= 0"
+    );
+    config.guidance.hold_radius = args.hold_radius;
     config.vessel = args.preset.params();
     config.preset = args.preset.name().to_string();
     config.seed = args.seed;
