@@ -112,7 +112,7 @@ pub enum HandshakeError {
     Hello(#[source] tokio_tungstenite::tungstenite::Error),
     #[error("refused: {code}: {message}")]
     Refused { code: String, message: String },
-    #[error("a command before the welcome")]
+    #[error("a command or mission before the welcome")]
     EarlyCommand,
     #[error("unreadable frame: {0}")]
     Unreadable(String),
@@ -138,7 +138,7 @@ pub async fn handshake(
     url: &str,
     token: Option<&str>,
     hello: &VesselMessage,
-) -> Result<Socket, HandshakeError> {
+) -> Result<(Socket, Option<String>), HandshakeError> {
     let request = request(url, token).map_err(HandshakeError::Url)?;
     // Small frames both ways: send each at once rather than waiting for
     // the previous one's acknowledgement (no Nagle), and a small read
@@ -162,11 +162,13 @@ pub async fn handshake(
     loop {
         match socket.next().await {
             Some(Ok(Message::Text(t))) => match serde_json::from_str::<CoordinatorMessage>(&t) {
-                Ok(CoordinatorMessage::Welcome { .. }) => return Ok(socket),
+                Ok(CoordinatorMessage::Welcome { mission, .. }) => return Ok((socket, mission)),
                 Ok(CoordinatorMessage::Error { code, message }) => {
                     return Err(HandshakeError::Refused { code, message });
                 }
-                Ok(CoordinatorMessage::Command(_)) => return Err(HandshakeError::EarlyCommand),
+                Ok(CoordinatorMessage::Command(_) | CoordinatorMessage::Mission { .. }) => {
+                    return Err(HandshakeError::EarlyCommand);
+                }
                 Err(e) => return Err(HandshakeError::Unreadable(e.to_string())),
             },
             Some(Ok(Message::Close(_))) | None => return Err(HandshakeError::Closed),
@@ -209,6 +211,10 @@ pub async fn run(
     let mut rng = ChaCha8Rng::seed_from_u64(config.seed);
     let mut backoff = Duration::from_millis(100);
     let mut unauthorized = 0;
+    // The mission this vessel follows, as the coordinator names it: said
+    // in each hello, so that a coordinator restarted without the mission
+    // holds the vessel rather than re-tasking it (docs/api.md).
+    let mut following: Option<String> = None;
     while !shutdown.is_cancelled() {
         if let Err(e) = request(&config.url, config.token.as_deref()) {
             tracing::error!(url = %config.url, error = %e, "bad coordinator URL");
@@ -223,6 +229,7 @@ pub async fn run(
             actuator: None,
             astern: config.astern,
             agility: config.agility,
+            mission: following.clone(),
         };
         tracing::info!(vessel = %config.vessel, url = %config.url, "connecting to the coordinator");
         let connected = tokio::select! {
@@ -230,7 +237,13 @@ pub async fn run(
             c = handshake(&config.url, config.token.as_deref(), &hello) => c,
         };
         let socket = match connected {
-            Ok(socket) => socket,
+            Ok((socket, named)) => {
+                // No name: held for following another mission; keep it.
+                if named.is_some() {
+                    following = named;
+                }
+                socket
+            }
             Err(e) => {
                 let wait = backoff.mul_f64(rng.random_range(0.5..1.5));
                 let retry_in_ms = wait.as_millis() as u64;
@@ -303,6 +316,10 @@ pub async fn run(
                             let _ = commands.try_send(Inbound::Command(c));
                         }
                         Ok(CoordinatorMessage::Welcome { .. }) => {}
+                        Ok(CoordinatorMessage::Mission { mission }) => {
+                            tracing::info!(vessel = %config.vessel, %mission, "the coordinator's mission changed");
+                            following = Some(mission);
+                        }
                         Ok(CoordinatorMessage::Error { code, message }) if code == "shutting_down" => {
                             tracing::info!(vessel = %config.vessel, %message, "coordinator stopping");
                         }

@@ -92,6 +92,7 @@ pub(super) fn hello(id: &str) -> VesselMessage {
         actuator: None,
         astern: None,
         agility: None,
+        mission: None,
     }
 }
 
@@ -117,7 +118,7 @@ pub(super) async fn run_link(
         }
     };
     let socket = match socket {
-        Ok(s) => {
+        Ok((s, _)) => {
             shared.welcomed.fetch_add(1, Ordering::Relaxed);
             shared.settled.fetch_add(1, Ordering::Relaxed);
             s

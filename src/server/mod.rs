@@ -208,6 +208,10 @@ pub async fn prepare(
         }
     }
     metrics::handle();
+    // Provisional: this coordinator's mission is only what it started with
+    // (an empty store, or none), so it re-tasks no vessel that follows
+    // another (docs/api.md, the vessel link).
+    let mut provisional = true;
     let (mission, store) = match &config.data_dir {
         Some(dir) => {
             let store = store::Store::open(dir)?;
@@ -224,6 +228,7 @@ pub async fn prepare(
                         objects = mission.objects().len(),
                         "serving the stored mission (a --config mission only seeds an empty data directory)"
                     );
+                    provisional = false;
                     mission
                 }
                 None => {
@@ -257,7 +262,10 @@ pub async fn prepare(
         },
         store,
     );
-    let coordinator = coordinator.recording(recorder.clone(), clock);
+    let mut coordinator = coordinator.recording(recorder.clone(), clock);
+    if provisional {
+        coordinator = coordinator.provisional();
+    }
     let (requests, rx) = mpsc::channel(1024);
     let tracker = TaskTracker::new();
     let tick = tokio::spawn(coordinator.run(rx, shutdown.clone()));

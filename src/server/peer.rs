@@ -452,6 +452,7 @@ async fn register(
             actuator: Some(actuator),
             astern: true,
             agility: None,
+            mission: None,
             tx,
             poses: slot,
             reply,

@@ -82,6 +82,7 @@ const READ_BUFFER: usize = 4 * 1024;
 fn text(msg: &CoordinatorMessage) -> Message {
     let kind = match msg {
         CoordinatorMessage::Welcome { .. } => "welcome",
+        CoordinatorMessage::Mission { .. } => "mission",
         CoordinatorMessage::Command(_) => "command",
         CoordinatorMessage::Error { .. } => "error",
     };
@@ -200,7 +201,7 @@ async fn run_link(mut socket: WebSocket, app: AppState, peer: Option<SocketAddr>
         _ = app.shutdown.cancelled() => return,
         first = tokio::time::timeout(Duration::from_secs(10), socket.recv()) => first,
     };
-    let (id, actuator, astern, agility) = match hello {
+    let (id, actuator, astern, agility, mission) = match hello {
         Ok(Some(Ok(Message::Text(t)))) => match parse(&t) {
             Ok(VesselMessage::Hello {
                 vessel,
@@ -208,6 +209,7 @@ async fn run_link(mut socket: WebSocket, app: AppState, peer: Option<SocketAddr>
                 actuator,
                 astern,
                 agility,
+                mission,
             }) => {
                 if protocol != 1 {
                     return refuse_hello(
@@ -231,7 +233,7 @@ async fn run_link(mut socket: WebSocket, app: AppState, peer: Option<SocketAddr>
                     )
                     .await;
                 }
-                (vessel, actuator, astern, agility)
+                (vessel, actuator, astern, agility, mission)
             }
             Ok(VesselMessage::Pose(_)) => {
                 return refuse_hello(socket, &app, peer, None, "protocol", "a pose before hello")
@@ -264,14 +266,15 @@ async fn run_link(mut socket: WebSocket, app: AppState, peer: Option<SocketAddr>
             actuator,
             astern: astern.unwrap_or(true),
             agility,
+            mission,
             tx,
             poses,
             reply: reply_tx,
         })
         .await
         .is_ok();
-    let tick_hz = match (registered, reply_rx.await) {
-        (true, Ok(Ok(hz))) => hz,
+    let welcomed = match (registered, reply_rx.await) {
+        (true, Ok(Ok(welcomed))) => welcomed,
         (_, Ok(Err(e))) => {
             return refuse_hello(socket, &app, peer, Some(&id), e.code(), e.to_string()).await;
         }
@@ -286,7 +289,8 @@ async fn run_link(mut socket: WebSocket, app: AppState, peer: Option<SocketAddr>
     if socket
         .send(text(&CoordinatorMessage::Welcome {
             vessel: id.clone(),
-            tick_hz,
+            tick_hz: welcomed.tick_hz,
+            mission: welcomed.mission,
         }))
         .await
         .is_err()

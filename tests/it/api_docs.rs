@@ -209,6 +209,7 @@ fn the_link_schema_accepts_the_real_messages() {
             actuator: None,
             astern: None,
             agility: None,
+            mission: None,
         },
         VesselMessage::Hello {
             vessel: "usv-2".into(),
@@ -222,6 +223,7 @@ fn the_link_schema_accepts_the_real_messages() {
                 yaw_accel: 0.75,
                 surge_accel: 0.5,
             }),
+            mission: Some("3f9a0c1de2b47a65".into()),
         },
         VesselMessage::Pose(pose()),
         VesselMessage::Pose(PoseDocument {
@@ -243,6 +245,10 @@ fn the_link_schema_accepts_the_real_messages() {
         CoordinatorMessage::Welcome {
             vessel: "usv-1".into(),
             tick_hz: 10.0,
+            mission: Some("3f9a0c1de2b47a65".into()),
+        },
+        CoordinatorMessage::Mission {
+            mission: "0b71c2d4e5f60718".into(),
         },
         CoordinatorMessage::Command(CommandDocument {
             tick: 42,

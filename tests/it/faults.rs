@@ -26,11 +26,11 @@ static ONE: tokio::sync::Mutex<()> = tokio::sync::Mutex::const_new(());
 /// A coordinator and eight simulated vessels, as separate processes.
 struct Harness {
     _one: tokio::sync::MutexGuard<'static, ()>,
-    _server: KillOnDrop,
+    server: KillOnDrop,
     _agents: KillOnDrop,
     addr: String,
     http: reqwest::Client,
-    _data: tempfile::TempDir,
+    data: tempfile::TempDir,
 }
 
 impl Harness {
@@ -51,15 +51,44 @@ impl Harness {
             .unwrap();
         let h = Harness {
             _one: one,
-            _server: KillOnDrop(server),
+            server: KillOnDrop(server),
             _agents: KillOnDrop(agents),
             addr,
             http: reqwest::Client::new(),
-            _data: data,
+            data,
         };
         h.until(30, "the eight vessels live", |vs| healthy(vs).len() == 8)
             .await;
         h
+    }
+
+    /// Kills the coordinator (SIGKILL) and starts it again on the same
+    /// address with an empty data directory and the built-in mission.
+    fn restart_with_an_empty_store(&mut self) {
+        let _ = self.server.0.kill();
+        let _ = self.server.0.wait();
+        self.data = tempfile::tempdir().unwrap();
+        let mut serve = Command::new(env!("CARGO_BIN_EXE_seacover"));
+        serve
+            .args(["serve", "--bind", &self.addr, "--no-record", "--data-dir"])
+            .arg(self.data.path())
+            .args(["--time-warp", &WARP.to_string()])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null());
+        let (server, addr) = start(serve);
+        assert_eq!(addr, self.addr);
+        self.server = KillOnDrop(server);
+    }
+
+    async fn add_risk_object(&self, id: &str) {
+        let r = self
+            .http
+            .post(format!("http://{}/api/v1/risk-objects", self.addr))
+            .json(&json!({"id": id, "x": 20.0, "y": 80.0, "alpha": 4.0, "sigma": 6.0}))
+            .send()
+            .await
+            .unwrap();
+        assert_eq!(r.status(), 201, "{:?}", r.text().await);
     }
 
     fn ws(&self) -> String {
@@ -218,11 +247,14 @@ async fn quarantine_case(bad: impl Fn(f64) -> Vec<Message>, code: &str, recovers
     assert_eq!(status["live"], true, "{status}");
 
     let mut got = send_all(&mut sink, &mut stream, bad(12.0)).await;
-    // Still refused while it keeps sending: held, every tick.
+    let status = h.vessel("faulty").await;
+    assert_eq!(status["quarantine"]["code"], code, "{status}");
+    // Still refused while it keeps sending: held, every tick. (The batch
+    // again goes back in time, so the latest refusal may be that.)
     got.extend(send_all(&mut sink, &mut stream, bad(12.5)).await);
     told_to_hold(&got, code);
     let status = h.vessel("faulty").await;
-    assert_eq!(status["quarantine"]["code"], code, "{status}");
+    assert!(status["quarantine"]["code"].is_string(), "{status}");
     assert_eq!(status["live"], false, "{status}");
     assert_eq!(status["connected"], true, "{status}");
     let refused = h
@@ -437,6 +469,66 @@ async fn one_id_on_two_links_keeps_the_newer() {
     assert!(replaced, "the older link was not told");
     let got = send_all(&mut b, &mut b_in, track(11.0, 20)).await;
     assert!(got.iter().any(|m| m["type"] == "command"), "{got:?}");
+    h.fleet_keeps_going(2.0).await;
+}
+
+/// "Why" 3, coordinator mode: a coordinator restarted on an empty store
+/// served its built-in mission, and every vessel of a fleet at sea on
+/// another took it. Now it holds them until an operator puts a mission;
+/// the same mission (the same name) holds no one.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_coordinator_restarted_without_the_mission_holds_the_fleet_until_one_is_put() {
+    let mut h = Harness::start().await;
+    h.restart_with_an_empty_store();
+    h.until(30, "the same mission: eight live, none held", |vs| {
+        healthy(vs).len() == 8
+    })
+    .await;
+
+    // The fleet's mission is now one the built-in default is not.
+    h.add_risk_object("fleet").await;
+    tokio::time::sleep(Duration::from_millis(500)).await;
+    h.restart_with_an_empty_store();
+    let stray = |vs: &[Value]| {
+        vs.iter()
+            .filter(|v| v["connected"] == true && v["live"] == false)
+            .filter(|v| v["quarantine"]["code"] == "unknown_mission")
+            .filter(|v| v["last_command"]["hold"].is_string())
+            .filter(|v| v["last_command"]["u_d"] == 0.0 && v["last_command"]["r_d"] == 0.0)
+            .count()
+    };
+    h.until(
+        30,
+        "eight vessels held for following another mission",
+        |vs| stray(vs) == 8,
+    )
+    .await;
+    // Their poses are consistent, and still they are held: only the
+    // operator decides.
+    tokio::time::sleep(Duration::from_secs(2)).await;
+    let vs = h.vessels().await;
+    assert_eq!(stray(&vs), 8, "released without an operator: {vs:#?}");
+    assert!(
+        vs[0]["quarantine"]["reason"]
+            .as_str()
+            .is_some_and(|r| r.contains("put a mission")),
+        "{:#}",
+        vs[0]
+    );
+    assert_eq!(h.metric("seacover_vessels_quarantined").await, 8.0);
+    let coverage = h.get("/api/v1/coverage").await;
+    assert_eq!(
+        coverage["cells"].as_array().map(Vec::len),
+        Some(0),
+        "{coverage}"
+    );
+
+    // The operator's change makes it the fleet's mission.
+    h.add_risk_object("shore").await;
+    h.until(10, "all eight released and commanded", |vs| {
+        healthy(vs).len() == 8
+    })
+    .await;
     h.fleet_keeps_going(2.0).await;
 }
 

@@ -260,6 +260,33 @@ fn without_credentials_nothing_is_heard_and_with_them_bad_input_changes_nothing(
         inject(&medium, &python, 4, &all);
         println!("peer_trust: sent 10 × {reason}");
     }
+    // A beacon that jumps 35 m in one second and back, again and again:
+    // at time warp 2 that is 17.5 m/s, beyond the hull's 10 m/s (and its
+    // 5 m of noise), though within what two senders of one id would show
+    // (the wire's 20 m/s): believed at first, then quarantined on board as
+    // a `jump`, kept as traffic.
+    let jumping = stamp(60.0, 0.0, "usv-7");
+    let mut all = vec![
+        "--fleet",
+        FLEET,
+        "--key-suffix",
+        "beacon/usv-7",
+        "--cbor-json",
+        &jumping,
+        "--stamp",
+        "--jump",
+        "35",
+        "--canonical",
+        "--count",
+        "6",
+        "--hz",
+        "1",
+        "--wait-subscriber",
+        "10",
+    ];
+    all.extend(c);
+    inject(&medium, &python, 4, &all);
+    println!("peer_trust: sent 6 × jump");
     let other = stamp(50.0, 0.0, "o1");
     let mut all = vec![
         "--fleet",
@@ -318,6 +345,7 @@ fn without_credentials_nothing_is_heard_and_with_them_bad_input_changes_nothing(
             "other_fleet",
             "mission_invalid",
             "outside_region",
+            "jump",
         ] {
             assert!(
                 refused(doc, reason) > refused(&before[id], reason),
@@ -334,6 +362,12 @@ fn without_credentials_nothing_is_heard_and_with_them_bad_input_changes_nothing(
                 .as_str()
                 .is_some_and(|why| why.contains("outside the task region")),
             "{id}: the stand-in outside the region is not shown quarantined: {doc}"
+        );
+        assert!(
+            doc["quarantined"]["usv-7"]
+                .as_str()
+                .is_some_and(|why| why.contains("beyond the hull's limit")),
+            "{id}: the jumping stand-in is not shown quarantined: {doc}"
         );
         let heard: Vec<&String> = doc["heard"].as_object().unwrap().keys().collect();
         assert!(

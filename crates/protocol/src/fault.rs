@@ -22,9 +22,11 @@ pub enum FixDocument {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
 pub struct QuarantineDocument {
     /// `not_finite`, `out_of_range`, `time_backwards`, `outside_region`,
-    /// `too_fast`, `jump` or `fix`.
+    /// `too_fast`, `jump` or `fix`: the latest refusal's; or
+    /// `unknown_mission`, a vessel following a mission this coordinator
+    /// does not hold (held until an operator changes the mission).
     pub code: String,
-    /// The refusal that put it there, in words.
+    /// The latest refusal, in words.
     pub reason: String,
     /// Mission time it began [s].
     pub since: f64,

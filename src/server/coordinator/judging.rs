@@ -35,7 +35,22 @@ pub(super) struct Bench<'a> {
 pub(super) struct Standing {
     judge: Judge,
     held: Option<Held>,
+    /// Held because it follows a mission this coordinator does not hold
+    /// (see [`Standing::hold_stray`]); its poses do not end it, an operator's
+    /// change does.
+    stray: Option<Stray>,
 }
+
+#[derive(Debug, Clone)]
+struct Stray {
+    document: QuarantineDocument,
+    /// Where it is held: its first believed position once held (its poses
+    /// are still believed, so the hold point must not follow them).
+    anchor: Option<[f64; 2]>,
+}
+
+/// [`QuarantineDocument::code`] of a vessel held by [`Standing::hold_stray`].
+pub const UNKNOWN_MISSION: &str = "unknown_mission";
 
 #[derive(Debug, Clone)]
 struct Held {
@@ -77,12 +92,62 @@ fn fix(p: &PoseDocument) -> Fix {
 impl Standing {
     /// Out of the partition and held.
     pub fn held(&self) -> bool {
-        self.held.is_some()
+        self.held.is_some() || self.stray.is_some()
     }
 
-    /// The quarantine as `GET /api/v1/vessels` shows it.
+    /// The quarantine as `GET /api/v1/vessels` shows it: a stray mission
+    /// first, since consistent poses do not end it.
     pub fn quarantine(&self) -> Option<QuarantineDocument> {
-        self.held.as_ref().map(|h| h.document.clone())
+        self.stray
+            .as_ref()
+            .map(|s| s.document.clone())
+            .or_else(|| self.held.as_ref().map(|h| h.document.clone()))
+    }
+
+    /// Holds vessel `id`, which says it follows mission `followed`, not
+    /// this coordinator's: a coordinator that only has its start-up
+    /// default (a fresh store) must not re-task a fleet at sea.
+    pub fn hold_stray(&mut self, id: &str, followed: &str, time: f64, recorder: &Recorder) {
+        let reason = format!(
+            "follows mission {followed}, which this coordinator does not hold (it started \
+             without a stored mission): put a mission to re-task the fleet"
+        );
+        tracing::warn!(vessel = %id, %reason, "held: it follows another mission");
+        recorder.event(
+            EventRecord::new(time, EventKind::Quarantined)
+                .vessel(id)
+                .code(UNKNOWN_MISSION)
+                .detail(reason.clone()),
+        );
+        self.stray = Some(Stray {
+            document: QuarantineDocument {
+                code: UNKNOWN_MISSION.to_string(),
+                reason,
+                since: time,
+                refused: 0,
+            },
+            anchor: None,
+        });
+    }
+
+    /// Held by [`Standing::hold_stray`].
+    pub fn is_stray(&self) -> bool {
+        self.stray.is_some()
+    }
+
+    /// Ends a [`Standing::hold_stray`] hold (an operator changed the mission);
+    /// `true` when there was one.
+    pub fn unstray(&mut self, id: &str, time: f64, recorder: &Recorder) -> bool {
+        if self.stray.take().is_none() {
+            return false;
+        }
+        tracing::info!(vessel = %id, "the mission was put: no longer held for following another");
+        recorder.event(
+            EventRecord::new(time, EventKind::Released)
+                .vessel(id)
+                .code(UNKNOWN_MISSION),
+        );
+        true
     }
 
     /// Judges vessel `id`'s `pose`.
@@ -122,7 +187,11 @@ impl Standing {
             .increment(1);
         match &mut self.held {
             Some(held) => {
+                // The latest refusal is what the operator must fix now (a
+                // jump may be followed by a lost fix); `since` keeps the first.
                 held.document.refused += 1;
+                held.document.code = fault.code().to_string();
+                held.document.reason.clone_from(&reason);
                 if bench.time - held.logged >= LOG_EVERY {
                     held.logged = bench.time;
                     tracing::warn!(vessel = %id, code = fault.code(), %reason, refused = held.document.refused, "still in quarantine");
@@ -155,18 +224,88 @@ impl Standing {
 
     /// While quarantined, the command that holds the vessel where it was
     /// last believed to be (`at`: its believed pose, if it had one).
-    pub fn hold_command(&self, tick: u64, at: Option<&PoseDocument>) -> Option<CommandDocument> {
-        let held = self.held.as_ref()?;
+    pub fn hold_command(
+        &mut self,
+        tick: u64,
+        at: Option<&PoseDocument>,
+    ) -> Option<CommandDocument> {
+        let here = at.map(|p| [p.x, p.y]);
+        let (reason, centroid) = match (&mut self.stray, &self.held) {
+            (Some(stray), _) => {
+                if stray.anchor.is_none() {
+                    stray.anchor = here;
+                }
+                (stray.document.reason.clone(), stray.anchor)
+            }
+            (None, Some(held)) => (held.document.reason.clone(), here),
+            (None, None) => return None,
+        };
         Some(CommandDocument {
             tick,
             u_d: 0.0,
             r_d: 0.0,
             u_d_dot: 0.0,
             r_d_dot: 0.0,
-            centroid: at.map_or([0.0, 0.0], |p| [p.x, p.y]),
+            centroid: centroid.unwrap_or([0.0, 0.0]),
             e: 0.0,
             psi_e: 0.0,
-            hold: Some(held.document.reason.clone()),
+            hold: Some(reason),
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::Point;
+
+    fn pose(t: f64, x: f64) -> PoseDocument {
+        PoseDocument {
+            t,
+            x,
+            y: 50.0,
+            psi: 0.0,
+            u: 0.0,
+            v: 0.0,
+            r: 0.0,
+            fix: None,
+            controlled: None,
+            telemetry: None,
+        }
+    }
+
+    #[test]
+    fn a_quarantine_shows_its_latest_refusal_and_when_it_began() {
+        let p = |x, y| Point { x, y };
+        let region = Region::new(
+            vec![p(0.0, 0.0), p(100.0, 0.0), p(100.0, 100.0), p(0.0, 100.0)],
+            vec![],
+        )
+        .unwrap();
+        let recorder = Recorder::off();
+        let limits = Limits::default();
+        let bench = |time| Bench {
+            limits: &limits,
+            region: &region,
+            time,
+            recorder: &recorder,
+        };
+        let mut standing = Standing::default();
+        for i in 0..5 {
+            let t = f64::from(i) * 0.1;
+            assert!(standing.judge("a", &pose(t, 50.0), &bench(t)).believed);
+        }
+        let jumped = standing.judge("a", &pose(0.5, 90.0), &bench(0.5));
+        assert!(!jumped.believed && jumped.notice.is_some());
+        assert_eq!(standing.quarantine().unwrap().code, "jump");
+        let beyond = standing.judge("a", &pose(0.6, 2e7), &bench(0.6));
+        assert!(!beyond.believed);
+        let q = standing.quarantine().unwrap();
+        assert_eq!(
+            (q.code.as_str(), q.since, q.refused),
+            ("out_of_range", 0.5, 2),
+            "{q:?}"
+        );
+        assert!(q.reason.contains("1e7"), "{q:?}");
     }
 }

@@ -23,6 +23,7 @@
 
 pub mod history;
 mod judging;
+mod requests;
 #[cfg(test)]
 mod tests;
 mod tick;
@@ -39,7 +40,7 @@ use tokio_util::sync::CancellationToken;
 use super::error::ApiError;
 use super::store::Store;
 use crate::control::barrier::Scratch;
-use crate::control::guidance::{Agility, Guidance};
+use crate::control::guidance::Guidance;
 use crate::control::model::State;
 use crate::control::plausibility::Limits;
 use crate::coverage::cells::cells_with;
@@ -68,12 +69,14 @@ pub enum Request {
         astern: bool,
         /// The command rates it can follow (its hello's `agility`).
         agility: Option<AgilityDocument>,
+        /// The mission it says it follows (its hello's `mission`).
+        mission: Option<String>,
         tx: mpsc::Sender<Outgoing>,
         /// The link's newest pose. A slot rather than a request per pose:
         /// the tick only ever wants the newest, and 1000 vessels at 20 Hz
         /// would otherwise wake this task 20,000 times a second.
         poses: watch::Receiver<Option<PoseDocument>>,
-        reply: oneshot::Sender<Result<f64, ApiError>>,
+        reply: oneshot::Sender<Result<Welcomed, ApiError>>,
     },
     /// A link closed.
     Gone { id: String, link: u64 },
@@ -91,6 +94,36 @@ pub enum Request {
         change: MissionChange,
         reply: oneshot::Sender<Result<ChangeResult, ApiError>>,
     },
+}
+
+/// What a vessel declared in its hello.
+struct Hello {
+    actuator: Option<ActuatorDocument>,
+    astern: bool,
+    agility: Option<AgilityDocument>,
+    mission: Option<String>,
+}
+
+/// What a registered link says in its welcome.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Welcomed {
+    pub tick_hz: f64,
+    /// The mission's name ([`mission_name`]); `None` for a vessel held for
+    /// following another, which keeps that one's name.
+    pub mission: Option<String>,
+}
+
+/// A mission's name on the vessel link: the first 64 bits of the SHA-1 of
+/// its document's JSON, in hex. The same mission has the same name on any
+/// coordinator (a restarted one given the same `--config`), so only a
+/// different mission makes a vessel's hello disagree.
+pub fn mission_name(mission: &Mission) -> String {
+    use sha1::Digest;
+    let json = serde_json::to_vec(&mission.document()).expect("a mission document serializes");
+    sha1::Sha1::digest(&json)[..8]
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
 }
 
 /// What readers get from the tick task's `watch`: the newest state (the
@@ -229,6 +262,13 @@ pub struct Coordinator {
     lapsed: BTreeSet<String>,
     /// H(P) since the first tick, bounded; published with each snapshot.
     history: history::History,
+    /// [`mission_name`] of the mission.
+    name: String,
+    /// The mission is only what this coordinator started with, into an
+    /// empty store (or none): not the fleet's. Until an operator changes
+    /// it, a vessel that names another mission in its hello is held
+    /// rather than re-tasked ([`judging::Standing::hold_stray`]).
+    provisional: bool,
 }
 
 impl Coordinator {
@@ -259,7 +299,6 @@ impl Coordinator {
         }));
         (
             Coordinator {
-                mission,
                 settings,
                 vessels: BTreeMap::new(),
                 tick: 0,
@@ -270,6 +309,9 @@ impl Coordinator {
                 live_before: BTreeSet::new(),
                 lapsed: BTreeSet::new(),
                 history,
+                name: mission_name(&mission),
+                mission,
+                provisional: false,
             },
             rx,
         )
@@ -281,6 +323,13 @@ impl Coordinator {
         recorder.mission(0.0, self.mission.document());
         self.recorder = recorder;
         self.clock = Some(clock);
+        self
+    }
+
+    /// Marks the mission as only the start-up default ([`Coordinator`]'s
+    /// `provisional`): the store was empty, or there is none.
+    pub fn provisional(mut self) -> Coordinator {
+        self.provisional = true;
         self
     }
 
@@ -387,112 +436,37 @@ impl Coordinator {
                 actuator,
                 astern,
                 agility,
+                mission,
                 tx,
                 poses,
                 reply,
             } => {
-                let actuator = actuator.unwrap_or(self.mission.actuator);
-                let agility = match agility {
-                    None => Agility::UNDECLARED,
-                    Some(a) => {
-                        let ok = |x: f64| x.is_finite() && x > 0.0;
-                        if !(ok(a.yaw_accel) && ok(a.surge_accel)) {
-                            let _ = reply.send(Err(ApiError::Invalid(
-                                "agility: yaw_accel and surge_accel must be finite numbers > 0"
-                                    .into(),
-                            )));
-                            return false;
-                        }
-                        Agility {
-                            yaw_accel: a.yaw_accel,
-                            surge_accel: a.surge_accel,
-                        }
-                    }
-                };
-                // The engine's bounds: a vessel outside them would make
-                // every tick's fleet invalid. Vessels may have different β
-                // (cells with curved edges).
-                use crate::coverage::fleet::{MAX_BETA, MAX_K};
-                let out_of_range = [("k", actuator.k, MAX_K), ("beta", actuator.beta, MAX_BETA)]
-                    .into_iter()
-                    .find(|&(_, x, max)| !(x.is_finite() && x > 0.0 && x <= max));
-                if let Some((field, value, max)) = out_of_range {
-                    let _ = reply.send(Err(ApiError::Invalid(format!(
-                        "actuator.{field}: must be a finite number in (0, {max:e}], got {value}"
-                    ))));
-                    return false;
-                }
-                if !self.vessels.contains_key(&id)
-                    && self.vessels.len() >= crate::coverage::fleet::MAX_VESSELS
-                {
-                    let _ = reply.send(Err(ApiError::Conflict(format!(
-                        "the mission already has {} vessels, the most it takes",
-                        crate::coverage::fleet::MAX_VESSELS
-                    ))));
-                    return false;
-                }
-                let gains = self.mission.guidance;
-                let entry = self.vessels.entry(id).or_insert_with(|| Entry {
+                let hello = Hello {
                     actuator,
-                    link: None,
-                    pose: None,
-                    last_seen_tick: None,
-                    guidance: Guidance::new(gains),
-                    last_command: None,
-                    neighbours: None,
-                    standing: judging::Standing::default(),
+                    astern,
+                    agility,
+                    mission,
+                };
+                let name = self.name.clone();
+                let welcomed = self.register(id, hello).map(|entry| {
+                    entry.link = Some(Link {
+                        id: link,
+                        tx,
+                        poses,
+                    });
+                    // A held stray keeps the name of what it followed.
+                    (!entry.standing.is_stray()).then_some(name)
                 });
-                if let Some(old) = entry.link.take() {
-                    let _ = old.tx.try_send(
-                        CoordinatorMessage::Error {
-                            code: "replaced".into(),
-                            message: "another link for this vessel connected".into(),
-                        }
-                        .into(),
-                    );
-                }
-                entry.actuator = actuator;
-                entry.guidance.ahead_only = !astern;
-                entry.guidance.agility = agility;
-                entry.link = Some(Link {
-                    id: link,
-                    tx,
-                    poses,
+                let welcomed = welcomed.map(|mission| Welcomed {
+                    tick_hz: self.mission.tick_hz,
+                    mission,
                 });
-                let _ = reply.send(Ok(self.mission.tick_hz));
+                let _ = reply.send(welcomed);
                 false
             }
             Request::Change { change, reply } => {
-                let outcome = self
-                    .mission
-                    .changed(&change)
-                    .map_err(ApiError::from)
-                    .and_then(|(next, answer)| {
-                        // Durable first, applied second: a change the store
-                        // refuses is not applied, and one that is answered
-                        // survives a crash. The commit blocks this task for one
-                        // fsync (a few ms); writes are rate-limited, so the tick
-                        // loses at most that, and changes stay in one order.
-                        if let Some(store) = &self.store {
-                            store.apply(&change, &answer).map_err(|e| {
-                                tracing::error!(error = %e, "a mission change could not be stored");
-                                ApiError::Storage(e.to_string())
-                            })?;
-                        }
-                        self.mission = next;
-                        Ok(answer)
-                    });
-                if outcome.is_ok() {
-                    self.recorder.mission(self.time(), self.mission.document());
-                }
+                let outcome = self.change(&change);
                 let changed = outcome.is_ok();
-                if changed {
-                    // Readers see the write at once, not at the next tick.
-                    let time = self.tick as f64 / self.mission.tick_hz;
-                    let live = self.live_ids();
-                    let evaluation = self.evaluate_live(&live);
-                    self.publish(time, &live, evaluation.as_ref());
-                }
                 let _ = reply.send(outcome);
                 changed
             }

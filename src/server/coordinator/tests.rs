@@ -34,6 +34,7 @@ fn register(
         actuator: None,
         astern: true,
         agility: None,
+        mission: None,
         tx,
         poses,
         reply,
@@ -244,4 +245,78 @@ fn the_watch_carries_a_bounded_history_from_the_first_tick() {
         assert_eq!(s.h, hs[s.tick as usize - 1], "tick {}", s.tick);
     }
     assert!(2500 - history.samples.last().unwrap().tick < 4);
+}
+
+/// A coordinator that only has its start-up mission holds a vessel that
+/// names another (welcomed without a name, out of the partition, told to
+/// hold); an operator's change releases it and names the new mission.
+#[test]
+fn a_provisional_mission_holds_a_vessel_that_follows_another_until_a_change() {
+    let mission = Mission::paper();
+    let mut c = coordinator(&mission).provisional();
+    let ours = mission_name(&mission);
+    assert_eq!(ours.len(), 16);
+    assert_eq!(
+        ours,
+        mission_name(&Mission::paper()),
+        "a name is the mission's alone"
+    );
+    let hello = |c: &mut Coordinator, id: &str, followed: Option<&str>| {
+        let (tx, rx) = mpsc::channel(16);
+        let (pose_tx, poses) = watch::channel(None);
+        let (reply, answer) = oneshot::channel();
+        c.on_request(Request::Register {
+            id: id.into(),
+            link: 1,
+            actuator: None,
+            astern: true,
+            agility: None,
+            mission: followed.map(String::from),
+            tx,
+            poses,
+            reply,
+        });
+        pose_tx.send_replace(Some(pose(30.0, 30.0 + id.len() as f64, 0.0, 0.0)));
+        (answer.blocking_recv().unwrap().unwrap(), pose_tx, rx)
+    };
+    let (same, _p1, _r1) = hello(&mut c, "same", Some(&ours));
+    assert_eq!(same.mission.as_deref(), Some(ours.as_str()));
+    let (fresh, _p2, _r2) = hello(&mut c, "fresh", None);
+    assert_eq!(fresh.mission.as_deref(), Some(ours.as_str()));
+    let (stray, _p3, mut rx) = hello(&mut c, "stray", Some("0123456789abcdef"));
+    assert_eq!(stray.mission, None, "a held vessel keeps the name it had");
+    let (written_tx, _written) = mpsc::channel(8);
+    let published = c.on_tick(1, std::time::Instant::now(), written_tx);
+    assert_eq!(published.live, ["fresh", "same"]);
+    c.finish_tick(published);
+    let held = command(&mut rx, "a hold");
+    assert!(
+        held.hold
+            .as_deref()
+            .is_some_and(|h| h.contains("0123456789abcdef")),
+        "{held:?}"
+    );
+    assert_eq!(held.centroid, [30.0, 35.0]);
+
+    let (reply, answer) = oneshot::channel();
+    c.on_request(Request::Change {
+        change: MissionChange::Base(2.0),
+        reply,
+    });
+    assert!(answer.blocking_recv().unwrap().is_ok());
+    let named = loop {
+        match rx.try_recv().expect("the new mission named on the link") {
+            Outgoing::Notice(CoordinatorMessage::Mission { mission }) => break mission,
+            _ => continue,
+        }
+    };
+    assert_ne!(named, ours);
+    assert_eq!(named, c.name);
+    let (written_tx, _written) = mpsc::channel(8);
+    let published = c.on_tick(1, std::time::Instant::now(), written_tx);
+    assert_eq!(published.live, ["fresh", "same", "stray"]);
+    // A later hello naming a mission it does not hold re-tasks: the
+    // mission is the fleet's now.
+    let (late, _p4, _r4) = hello(&mut c, "late", Some("0123456789abcdef"));
+    assert_eq!(late.mission.as_deref(), Some(named.as_str()));
 }

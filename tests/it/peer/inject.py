@@ -11,7 +11,9 @@ scripts/test), independently of seacover's code. Two modes:
   integers), put on ``seacover/<fleet>/<suffix>`` ``--count N`` times
   (0: until SIGTERM/SIGINT) at ``--hz F``. With ``--stamp`` (CBOR maps only)
   each message gets ``seq`` = message number mod 65536 and ``t`` = the
-  sender's UTC time in seconds, as a live beacon would.
+  sender's UTC time in seconds, as a live beacon would; ``--jump DX`` then
+  adds DX metres to ``x`` of every other message (a position no hull can
+  reach between two beacons).
 - ``--mission-json FILE``: the file's bytes are put on
   ``seacover/<fleet>/mission`` (``--count`` times, at ``--hz``).
 
@@ -49,6 +51,8 @@ def parse_args(argv):
     p.add_argument("--hz", type=float, default=10.0, help="messages per second")
     p.add_argument("--stamp", action="store_true",
                    help="set seq and t in each CBOR map as a live beacon would")
+    p.add_argument("--jump", type=float, default=0.0, metavar="DX",
+                   help="with --stamp, add DX metres to x of every odd-numbered message")
     p.add_argument("--canonical", action="store_true",
                    help="encode CBOR maps canonically (shortest floats, sorted keys)")
     p.add_argument("--alive", metavar="ID", help="declare the token seacover/<fleet>/alive/ID")
@@ -60,6 +64,8 @@ def parse_args(argv):
         p.error("--key-suffix is required with --hex and --cbor-json")
     if args.stamp and args.cbor_json is None:
         p.error("--stamp needs --cbor-json")
+    if args.jump and not args.stamp:
+        p.error("--jump needs --stamp")
     if args.hz <= 0:
         p.error("--hz must be positive")
     return args
@@ -85,7 +91,9 @@ def payloads(args):
         return args.key_suffix, lambda _n: data
 
     def stamped(n):
-        return cbor2.dumps({**doc, "seq": n % 256, "t": time.time()}, canonical=args.canonical)
+        x = doc.get("x", 0.0) + (args.jump if n % 2 else 0.0)
+        return cbor2.dumps({**doc, "x": x, "seq": n % 256, "t": time.time()},
+                           canonical=args.canonical)
     return args.key_suffix, stamped
 
 

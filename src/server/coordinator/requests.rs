@@ -1,0 +1,126 @@
+//! The tick task's answers to a hello and to an operator's change: what
+//! may join the fleet, and what a change of mission tells the fleet.
+//!
+//! Invariants: an entry's actuator and agility are within the engine's
+//! bounds; a change is durable before it is applied and answered; a
+//! coordinator whose mission is only its start-up default re-tasks no
+//! vessel that names another mission, until an operator changes it.
+
+use super::{ApiError, Coordinator, Entry, Hello, Outgoing, judging, mission_name};
+use crate::control::guidance::{Agility, Guidance};
+use crate::mission::{ChangeResult, MissionChange};
+use crate::protocol::{AgilityDocument, CoordinatorMessage};
+
+fn agility(declared: Option<AgilityDocument>) -> Result<Agility, ApiError> {
+    let Some(a) = declared else {
+        return Ok(Agility::UNDECLARED);
+    };
+    let ok = |x: f64| x.is_finite() && x > 0.0;
+    if !(ok(a.yaw_accel) && ok(a.surge_accel)) {
+        return Err(ApiError::Invalid(
+            "agility: yaw_accel and surge_accel must be finite numbers > 0".into(),
+        ));
+    }
+    Ok(Agility {
+        yaw_accel: a.yaw_accel,
+        surge_accel: a.surge_accel,
+    })
+}
+
+impl Coordinator {
+    /// Judges vessel `id`'s hello and makes (or finds) its entry; a link it
+    /// had before is told it is replaced. The caller gives it its link.
+    pub(super) fn register(&mut self, id: String, hello: Hello) -> Result<&mut Entry, ApiError> {
+        let actuator = hello.actuator.unwrap_or(self.mission.actuator);
+        let agility = agility(hello.agility)?;
+        // The engine's bounds: a vessel outside them would make every
+        // tick's fleet invalid. Vessels may have different β (cells with
+        // curved edges).
+        use crate::coverage::fleet::{MAX_BETA, MAX_K, MAX_VESSELS};
+        let out_of_range = [("k", actuator.k, MAX_K), ("beta", actuator.beta, MAX_BETA)]
+            .into_iter()
+            .find(|&(_, x, max)| !(x.is_finite() && x > 0.0 && x <= max));
+        if let Some((field, value, max)) = out_of_range {
+            return Err(ApiError::Invalid(format!(
+                "actuator.{field}: must be a finite number in (0, {max:e}], got {value}"
+            )));
+        }
+        if !self.vessels.contains_key(&id) && self.vessels.len() >= MAX_VESSELS {
+            return Err(ApiError::Conflict(format!(
+                "the mission already has {MAX_VESSELS} vessels, the most it takes"
+            )));
+        }
+        let time = self.time();
+        let gains = self.mission.guidance;
+        let entry = self.vessels.entry(id.clone()).or_insert_with(|| Entry {
+            actuator,
+            link: None,
+            pose: None,
+            last_seen_tick: None,
+            guidance: Guidance::new(gains),
+            last_command: None,
+            neighbours: None,
+            standing: judging::Standing::default(),
+        });
+        if let Some(old) = entry.link.take() {
+            let _ = old.tx.try_send(
+                CoordinatorMessage::Error {
+                    code: "replaced".into(),
+                    message: "another link for this vessel connected".into(),
+                }
+                .into(),
+            );
+        }
+        entry.actuator = actuator;
+        entry.guidance.ahead_only = !hello.astern;
+        entry.guidance.agility = agility;
+        if let Some(followed) = hello.mission.as_deref()
+            && self.provisional
+            && followed != self.name
+            && !entry.standing.is_stray()
+        {
+            entry
+                .standing
+                .hold_stray(&id, followed, time, &self.recorder);
+        }
+        Ok(entry)
+    }
+
+    /// Applies an operator's change: stored first (a change the store
+    /// refuses is not applied, and one that is answered survives a crash),
+    /// then applied, recorded, named to every link, and shown to readers
+    /// at once. The commit blocks this task for one fsync (a few ms);
+    /// writes are rate-limited, so the tick loses at most that, and
+    /// changes stay in one order.
+    pub(super) fn change(&mut self, change: &MissionChange) -> Result<ChangeResult, ApiError> {
+        let (next, answer) = self.mission.changed(change)?;
+        if let Some(store) = &self.store {
+            store.apply(change, &answer).map_err(|e| {
+                tracing::error!(error = %e, "a mission change could not be stored");
+                ApiError::Storage(e.to_string())
+            })?;
+        }
+        self.mission = next;
+        self.name = mission_name(&self.mission);
+        let time = self.time();
+        self.recorder.mission(time, self.mission.document());
+        // An operator's act makes the mission the fleet's: vessels held
+        // for following another take this one.
+        let released = std::mem::take(&mut self.provisional);
+        for (id, entry) in &mut self.vessels {
+            if released {
+                entry.standing.unstray(id, time, &self.recorder);
+            }
+            if let Some(link) = &entry.link {
+                let named = CoordinatorMessage::Mission {
+                    mission: self.name.clone(),
+                };
+                let _ = link.tx.try_send(Outgoing::Notice(named));
+            }
+        }
+        let live = self.live_ids();
+        let evaluation = self.evaluate_live(&live);
+        self.publish(time, &live, evaluation.as_ref());
+        Ok(answer)
+    }
+}
