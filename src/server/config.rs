@@ -97,6 +97,7 @@ pub struct GuidanceSection {
     pub filter_time: Option<f64>,
     pub yaw_accel: Option<f64>,
     pub surge_accel: Option<f64>,
+    pub hold_radius: Option<f64>,
 }
 
 /// What a configuration file settles.
@@ -196,6 +197,7 @@ impl Settings {
             (&mut d.filter_time, g.filter_time),
             (&mut d.yaw_accel, g.yaw_accel),
             (&mut d.surge_accel, g.surge_accel),
+            (&mut d.hold_radius, g.hold_radius),
         ] {
             if let Some(v) = value {
                 *slot = v;

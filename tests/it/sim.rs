@@ -125,7 +125,10 @@ fn runs_are_deterministic_for_a_seed() {
 }
 
 /// The paper's figures (docs/reproducing-the-paper.md) on its scenario, 200 s, with `args` (preset,
-/// disturbance, safety): after 20 s every vessel tracks the reference its
+/// disturbance, safety) and without station keeping, as the table there
+/// is made (the paper has none: with it a settled vessel may rest up to
+/// twice the hold radius off, `converged_vessels_keep_station…` below):
+/// after 20 s every vessel tracks the reference its
 /// controller is given to within 0.05 (m/s, rad/s), and the coordinator's
 /// command itself (tracking error plus how far that reference lags the
 /// command) as well; it ends within 0.2 m of its centroid with H within
@@ -136,7 +139,10 @@ fn runs_are_deterministic_for_a_seed() {
 /// not bounded here).
 fn the_papers_claims_hold(name: &str, args: &[&str]) {
     let out = tmp(name);
-    let s = sim(&out, &[args, &["--no-figures"]].concat());
+    let s = sim(
+        &out,
+        &[args, &["--no-figures", "--hold-radius", "0"]].concat(),
+    );
     let e = s["E_max_end"].as_f64().unwrap();
     let (h, lloyd) = (
         s["H_end"].as_f64().unwrap(),
@@ -245,10 +251,12 @@ fn settled(out: &Path, window: f64) -> (f64, f64, f64, f64) {
 
 #[test]
 fn converged_vessels_keep_station_without_turning_inside_the_hold_radius() {
-    // Without station keeping a converged vessel chases a goal centimetres
-    // away and turns for ever; with it (`--hold-radius`, experimental, see
-    // docs/reproducing-the-paper.md) it stops turning and H is as it was.
-    // 600 s: with it the fleet takes longer than the paper's 200 s to settle.
+    // "Why" 6: without station keeping (`--hold-radius 0`) a converged
+    // vessel chases a goal centimetres away and turns for ever; with it
+    // (the default, docs/reproducing-the-paper.md "Quiet arrival") it stops
+    // turning and H is as it was, and every hand-over between keeping and
+    // the `course` law is one the vessel follows. 600 s: well after the
+    // fleet has settled.
     for preset in ["paper", "otter"] {
         let (a, b) = (
             tmp(&format!("hold-none-{preset}")),
@@ -256,7 +264,19 @@ fn converged_vessels_keep_station_without_turning_inside_the_hold_radius() {
         );
         let common = ["--preset", preset, "--duration", "600", "--no-figures"];
         sim(&a, &[&common[..], &["--hold-radius", "0"]].concat());
-        sim(&b, &[&common[..], &["--hold-radius", "0.2"]].concat());
+        let summary = sim(&b, &common);
+        let pair = |key: &str| {
+            let v = &summary[key];
+            (v["u"].as_f64().unwrap(), v["r"].as_f64().unwrap())
+        };
+        let ((u_err, r_err), (lag_u, lag_r)) = (
+            pair("velocity_error_max_after_20s"),
+            pair("command_lag_max_after_20s"),
+        );
+        assert!(
+            u_err + lag_u < 0.05 && r_err + lag_r < 0.05,
+            "{preset}: against the command after 20 s: u {u_err} + {lag_u}, r {r_err} + {lag_r}"
+        );
         let (r0, _, _, h0) = settled(&a, 100.0);
         let (r, u, e, h) = settled(&b, 100.0);
         println!(

@@ -67,6 +67,7 @@ pub fn guidance_document(g: &GuidanceGains) -> GuidanceDocument {
         filter_time: g.filter_time,
         yaw_accel: g.yaw_accel,
         surge_accel: g.surge_accel,
+        hold_radius: g.hold_radius,
     }
 }
 
@@ -80,7 +81,7 @@ pub fn safety_document(p: &SafetyParams) -> SafetyDocument {
 }
 
 /// Guidance gains from their document: a known mode, every gain finite and
-/// positive (the arrival radius may be zero).
+/// positive (the arrival and hold radii may be zero).
 pub fn guidance_gains(doc: &GuidanceDocument) -> Result<GuidanceGains, MissionError> {
     let mode = GuidanceMode::parse(&doc.mode).ok_or_else(|| {
         MissionError::Invalid(format!(
@@ -108,10 +109,15 @@ pub fn guidance_gains(doc: &GuidanceDocument) -> Result<GuidanceGains, MissionEr
             )));
         }
     }
-    if !(doc.arrival_radius.is_finite() && doc.arrival_radius >= 0.0) {
-        return Err(MissionError::Invalid(
-            "guidance.arrival_radius: must be a finite number >= 0".into(),
-        ));
+    for (name, value) in [
+        ("arrival_radius", doc.arrival_radius),
+        ("hold_radius", doc.hold_radius),
+    ] {
+        if !(value.is_finite() && value >= 0.0) {
+            return Err(MissionError::Invalid(format!(
+                "guidance.{name}: must be a finite number >= 0"
+            )));
+        }
     }
     Ok(GuidanceGains {
         mode,
@@ -122,8 +128,7 @@ pub fn guidance_gains(doc: &GuidanceDocument) -> Result<GuidanceGains, MissionEr
         k_u2: doc.k_u2,
         b2: doc.b2,
         arrival_radius: doc.arrival_radius,
-        // Station keeping is not yet a mission setting (docs/api.md).
-        hold_radius: 0.0,
+        hold_radius: doc.hold_radius,
         max_speed: doc.max_speed,
         max_yaw_rate: doc.max_yaw_rate,
         filter_time: doc.filter_time,

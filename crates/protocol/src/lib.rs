@@ -552,15 +552,25 @@ pub struct GuidanceDocument {
     pub max_yaw_rate: f64,
     pub filter_time: f64,
     /// Largest rate of change of the `course` mode's yaw-rate command
-    /// [rad/s²]; 0.5 when absent.
+    /// [rad/s²]; 2.0 when absent.
     #[serde(default = "default_yaw_accel")]
     #[schema(default = default_yaw_accel)]
     pub yaw_accel: f64,
     /// Largest rate of change of the `course` mode's surge command beyond
-    /// what the turning bow asks for [m/s²]; 0.5 when absent.
+    /// what the turning bow asks for [m/s²]; 0.75 when absent.
     #[serde(default = "default_surge_accel")]
     #[schema(default = default_surge_accel)]
     pub surge_accel: f64,
+    /// Within this distance of its settled goal a `course` vessel stops
+    /// turning and keeps station, until twice as far [m]; 0 never; 0.2
+    /// when absent (docs/reproducing-the-paper.md, "Quiet arrival").
+    #[serde(default = "default_hold_radius")]
+    #[schema(default = default_hold_radius)]
+    pub hold_radius: f64,
+}
+
+fn default_hold_radius() -> f64 {
+    seacover_engine::control::guidance::GuidanceGains::default().hold_radius
 }
 
 fn default_yaw_accel() -> f64 {

@@ -46,12 +46,15 @@
 //! the safety filter changes the vessel's velocity the keeper yields at
 //! once: keeping station never outranks keeping clear.
 //!
-//! **Status: experimental, off by default** (`hold_radius` 0; `seacover sim
-//! --hold-radius`; not yet a mission setting). Measured in
-//! docs/reproducing-the-paper.md ("Quiet arrival"): once the fleet has
-//! settled both presets keep station without turning, but the fleet settles
-//! more slowly than without it, and the hand-over back to the `course` law
-//! asks for a step the Otter's governor cannot follow.
+//! Keeping starts only once the goal has settled (it moves slower than
+//! [`SETTLED`]) and ends when it moves again (faster than [`UNSETTLED`]):
+//! while the fleet is still spreading, the `course` law follows the goal
+//! and Lloyd's iteration goes on at its own pace. When keeping ends, the
+//! `course` law's turn comes back over [`RETURN`] seconds rather than at
+//! once (a hull at rest cannot take its full yaw rate in a step); the
+//! safety filter's turn is never faded. On by default (`hold_radius`
+//! 0.2 m, a mission setting); measured in docs/reproducing-the-paper.md
+//! ("Quiet arrival").
 //!
 //! Invariant: the keeper's commands are bounded by [`AIM_RATE`] and
 //! [`KEEP_SPEED`] and go through the same command line (continuity, rate
@@ -93,6 +96,34 @@ const ALIGNED: f64 = 0.1;
 pub const COAST: f64 = 5.0;
 /// Turn rate allowed while thrusting [rad/s]: only to hold the heading.
 const HOLD_RATE: f64 = 0.02;
+/// A goal moving slower than this [m/s] has settled: keeping may start.
+pub const SETTLED: f64 = 0.01;
+/// A goal moving faster than this [m/s] is left to the `course` law: the
+/// fleet is moving again, and the keeper's slow turns would lag it.
+pub const UNSETTLED: f64 = 0.03;
+/// Over this many seconds after keeping ends the `course` law's turn comes
+/// in from nothing (its authority grows linearly): a hull at rest asked at
+/// once for the law's full yaw rate cannot follow it.
+pub const RETURN: f64 = 4.0;
+
+/// What the keeper looks at on a tick.
+#[derive(Debug, Clone, Copy)]
+pub struct Look<'a> {
+    /// 0: never keep station.
+    pub hold_radius: f64,
+    pub state: &'a State,
+    pub goal: (f64, f64),
+    /// Distance to the goal [m].
+    pub e: f64,
+    /// How fast the goal moves [m/s].
+    pub goal_speed: f64,
+    /// Mission time [s].
+    pub t: f64,
+    /// The safety filter changed the vessel's desired velocity.
+    pub yielding: bool,
+    /// The hull cannot go astern.
+    pub ahead_only: bool,
+}
 
 /// Where a vessel is in keeping station.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -100,6 +131,9 @@ pub enum Phase {
     /// The `course` law steers.
     #[default]
     Free,
+    /// The `course` law steers, its turn coming in since `since` (keeping
+    /// ended then).
+    Returning { since: f64 },
     /// Shedding its velocity.
     Braking,
     /// Holding station, the bow aimed at `heading`; `shedding`: along the
@@ -110,8 +144,9 @@ pub enum Phase {
 /// What the guidance does this tick.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Order {
-    /// The `course` law towards the desired velocity.
-    Steer,
+    /// The `course` law towards the desired velocity, its yaw rate (and
+    /// the surge rate that comes of it) scaled by this authority in [0, 1].
+    Steer(f64),
     /// The `course` law towards rest (w_d = 0).
     Brake,
     /// This raw command: (u_d, r_d, the heading error acted on).
@@ -124,31 +159,44 @@ pub enum Order {
 }
 
 impl Phase {
-    /// Moves through the phases for a vessel in `state`, `e` metres from
-    /// `goal`, and says what to command. `yielding`: the safety filter
-    /// changed the vessel's desired velocity. A `hold_radius` of 0 never
-    /// keeps station.
-    pub fn advance(
-        &mut self,
-        hold_radius: f64,
-        state: &State,
-        goal: (f64, f64),
-        e: f64,
-        yielding: bool,
-        ahead_only: bool,
-    ) -> Order {
+    /// Moves through the phases and says what to command (see the module
+    /// doc).
+    pub fn advance(&mut self, look: &Look<'_>) -> Order {
+        let Look {
+            hold_radius,
+            state,
+            goal,
+            e,
+            goal_speed,
+            t,
+            yielding,
+            ahead_only,
+        } = *look;
         let (wx, wy) = state.ground_velocity();
         let speed = wx.hypot(wy);
         let (ex, ey) = (goal.0 - state.x, goal.1 - state.y);
-        if yielding || hold_radius <= 0.0 || e > 2.0 * hold_radius {
+        let keeps = matches!(self, Phase::Braking | Phase::Keeping { .. });
+        if yielding || hold_radius <= 0.0 {
+            // Keeping clear is never faded in.
             *self = Phase::Free;
+        } else if keeps && (e > 2.0 * hold_radius || goal_speed > UNSETTLED) {
+            *self = Phase::Returning { since: t };
         }
         loop {
             match *self {
-                Phase::Free if e < hold_radius && !yielding && hold_radius > 0.0 => {
+                Phase::Free | Phase::Returning { .. }
+                    if e < hold_radius
+                        && goal_speed < SETTLED
+                        && !yielding
+                        && hold_radius > 0.0 =>
+                {
                     *self = Phase::Braking;
                 }
-                Phase::Free => return Order::Steer,
+                Phase::Free => return Order::Steer(1.0),
+                Phase::Returning { since } if t - since >= RETURN || t < since => {
+                    *self = Phase::Free;
+                }
+                Phase::Returning { since } => return Order::Steer((t - since) / RETURN),
                 Phase::Braking if speed < SLOW => {
                     *self = Phase::Keeping {
                         heading: state.psi,
@@ -252,6 +300,27 @@ mod tests {
     use super::*;
     use crate::control::Vec3;
 
+    /// A settled goal at time 0.
+    fn look<'a>(
+        hold_radius: f64,
+        state: &'a State,
+        goal: (f64, f64),
+        e: f64,
+        yielding: bool,
+        ahead_only: bool,
+    ) -> Look<'a> {
+        Look {
+            hold_radius,
+            state,
+            goal,
+            e,
+            goal_speed: 0.0,
+            t: 0.0,
+            yielding,
+            ahead_only,
+        }
+    }
+
     fn at(x: f64, y: f64, psi: f64, vel: (f64, f64, f64)) -> State {
         State {
             x,
@@ -267,20 +336,26 @@ mod tests {
         let goal = (0.0, 0.0);
         // Outside the radius: the course law.
         let s = at(-1.0, 0.0, 0.0, (0.2, 0.0, 0.0));
-        assert_eq!(p.advance(0.25, &s, goal, 1.0, false, false), Order::Steer);
+        assert_eq!(
+            p.advance(&look(0.25, &s, goal, 1.0, false, false)),
+            Order::Steer(1.0)
+        );
         // Inside, still moving: brake.
         let s = at(0.0, -0.2, 0.0, (0.05, 0.0, 0.0));
-        assert_eq!(p.advance(0.25, &s, goal, 0.2, false, false), Order::Brake);
+        assert_eq!(
+            p.advance(&look(0.25, &s, goal, 0.2, false, false)),
+            Order::Brake
+        );
         // At rest, goal on the beam: turn towards it, slowly, coasting.
         let s = at(0.0, -0.2, 0.0, (0.0, 0.0, 0.0));
-        let Order::Hold { u, r, .. } = p.advance(0.25, &s, goal, 0.2, false, false) else {
+        let Order::Hold { u, r, .. } = p.advance(&look(0.25, &s, goal, 0.2, false, false)) else {
             panic!("{p:?}");
         };
         assert!(u.abs() < 1e-12, "{u}");
         assert!((r - AIM_RATE).abs() < 1e-12, "{r}");
         // Bow on the goal: thrust towards it without turning.
         let s = at(0.0, -0.1, FRAC_PI_2, (0.0, 0.0, 0.0));
-        let Order::Hold { u, r, .. } = p.advance(0.25, &s, goal, 0.1, false, false) else {
+        let Order::Hold { u, r, .. } = p.advance(&look(0.25, &s, goal, 0.1, false, false)) else {
             panic!("{p:?}");
         };
         assert!((u - GAIN * 0.1).abs() < 1e-12, "{u}");
@@ -288,7 +363,7 @@ mod tests {
         // Nearly there, a change too small for a turn: the bow is held
         // wherever the goal lies.
         let s = at(0.03, 0.0, FRAC_PI_2, (0.0, 0.0, 0.0));
-        let Order::Hold { r, .. } = p.advance(0.25, &s, goal, 0.03, false, false) else {
+        let Order::Hold { r, .. } = p.advance(&look(0.25, &s, goal, 0.03, false, false)) else {
             panic!("{p:?}");
         };
         assert!(r.abs() < 1e-12, "{r}");
@@ -303,7 +378,8 @@ mod tests {
             shedding: false,
         };
         let s = at(0.0, 0.0, 0.0, (0.0, 0.018, 0.0));
-        let Order::Hold { u, r, .. } = p.advance(0.25, &s, (0.0, 0.0), 0.0, false, false) else {
+        let Order::Hold { u, r, .. } = p.advance(&look(0.25, &s, (0.0, 0.0), 0.0, false, false))
+        else {
             panic!("{p:?}");
         };
         let Phase::Keeping { heading, .. } = p else {
@@ -319,7 +395,7 @@ mod tests {
         let goal = (0.0, 0.0);
         // Goal behind: the bow stays, the surge goes astern.
         let s = at(0.2, 0.0, 0.0, (0.0, 0.0, 0.0));
-        let Order::Hold { u, r, .. } = p.advance(0.25, &s, goal, 0.2, false, false) else {
+        let Order::Hold { u, r, .. } = p.advance(&look(0.25, &s, goal, 0.2, false, false)) else {
             panic!("{p:?}");
         };
         assert!(
@@ -330,23 +406,38 @@ mod tests {
         assert!(r.abs() < 1e-12, "{r}");
         // Drifting: brake again.
         let s = at(0.2, 0.0, 0.0, (0.0, 0.2, 0.0));
-        assert_eq!(p.advance(0.25, &s, goal, 0.2, false, false), Order::Brake);
+        assert_eq!(
+            p.advance(&look(0.25, &s, goal, 0.2, false, false)),
+            Order::Brake
+        );
         // Hysteresis: between the radius and twice it, braking goes on;
-        // beyond, the course law.
+        // beyond, the course law, its turn fading in.
         let s = at(0.4, 0.0, 0.0, (0.0, 0.2, 0.0));
-        assert_eq!(p.advance(0.25, &s, goal, 0.4, false, false), Order::Brake);
+        assert_eq!(
+            p.advance(&look(0.25, &s, goal, 0.4, false, false)),
+            Order::Brake
+        );
         let s = at(0.6, 0.0, 0.0, (0.0, 0.2, 0.0));
-        assert_eq!(p.advance(0.25, &s, goal, 0.6, false, false), Order::Steer);
+        assert_eq!(
+            p.advance(&look(0.25, &s, goal, 0.6, false, false)),
+            Order::Steer(0.0)
+        );
         // The safety filter's say ends keeping at once.
         let mut p = Phase::Keeping {
             heading: 0.0,
             shedding: false,
         };
         let s = at(0.1, 0.0, 0.0, (0.0, 0.0, 0.0));
-        assert_eq!(p.advance(0.25, &s, goal, 0.1, true, false), Order::Steer);
+        assert_eq!(
+            p.advance(&look(0.25, &s, goal, 0.1, true, false)),
+            Order::Steer(1.0)
+        );
         // And a radius of 0 never keeps station.
         let mut p = Phase::Free;
-        assert_eq!(p.advance(0.0, &s, goal, 0.0, false, false), Order::Steer);
+        assert_eq!(
+            p.advance(&look(0.0, &s, goal, 0.0, false, false)),
+            Order::Steer(1.0)
+        );
     }
 
     #[test]
@@ -356,10 +447,65 @@ mod tests {
             shedding: false,
         };
         let s = at(0.0, -0.2, 0.3, (0.0, 0.0, 0.0));
-        let Order::Hold { u, r, .. } = p.advance(0.25, &s, (0.0, 0.0), 0.2, false, true) else {
+        let Order::Hold { u, r, .. } = p.advance(&look(0.25, &s, (0.0, 0.0), 0.2, false, true))
+        else {
             panic!("{p:?}");
         };
         assert!(r.abs() < 1e-12, "{r}");
         assert!(u > 0.0, "{u}");
+    }
+
+    #[test]
+    fn keeping_waits_for_a_settled_goal_and_hands_back_gradually() {
+        let goal = (0.0, 0.0);
+        let s = at(0.1, 0.0, 0.0, (0.0, 0.0, 0.0));
+        // Inside the radius, but the goal still moves: the course law.
+        let mut p = Phase::Free;
+        let moving = Look {
+            goal_speed: 2.0 * SETTLED,
+            ..look(0.25, &s, goal, 0.1, false, false)
+        };
+        assert_eq!(p.advance(&moving), Order::Steer(1.0));
+        // Settled: keep station.
+        assert!(matches!(
+            p.advance(&look(0.25, &s, goal, 0.1, false, false)),
+            Order::Hold { .. }
+        ));
+        // The fleet moves again: the course law's turn comes in over RETURN.
+        let away = Look {
+            goal_speed: 2.0 * UNSETTLED,
+            t: 10.0,
+            ..look(0.25, &s, goal, 0.1, false, false)
+        };
+        assert_eq!(p.advance(&away), Order::Steer(0.0));
+        let later = Look {
+            t: 10.0 + RETURN / 2.0,
+            ..away
+        };
+        assert_eq!(p.advance(&later), Order::Steer(0.5));
+        let done = Look {
+            t: 10.0 + RETURN,
+            ..away
+        };
+        assert_eq!(p.advance(&done), Order::Steer(1.0));
+        assert_eq!(p, Phase::Free);
+        // Beyond twice the radius likewise; the safety filter at once.
+        let mut p = Phase::Keeping {
+            heading: 0.0,
+            shedding: false,
+        };
+        let far = at(0.6, 0.0, 0.0, (0.0, 0.0, 0.0));
+        assert_eq!(
+            p.advance(&look(0.25, &far, goal, 0.6, false, false)),
+            Order::Steer(0.0)
+        );
+        let mut p = Phase::Keeping {
+            heading: 0.0,
+            shedding: false,
+        };
+        assert_eq!(
+            p.advance(&look(0.25, &far, goal, 0.6, true, false)),
+            Order::Steer(1.0)
+        );
     }
 }

@@ -45,8 +45,8 @@ pub struct Args {
     /// Guidance law: `course` (converges) or `paper` (the literal law).
     #[arg(long, value_enum, default_value = "course")]
     guidance: Guidance,
-    /// Inside this distance of its centroid a `course` vessel stops turning
-    /// and keeps station (until twice as far); 0 never does.
+    /// Inside this distance of its settled centroid a `course` vessel stops
+    /// turning and keeps station (until twice as far); 0 never does.
     #[arg(long, value_name = "M", default_value_t = seacover::control::guidance::GuidanceGains::default().hold_radius)]
     hold_radius: f64,
     /// Vessel preset: `paper` or `otter`.
