@@ -32,7 +32,7 @@ use serde_json::json;
 
 use crate::common::sitl::{
     Boat, Bridge, ORIGIN, SPEEDUP, Seen, Station, all_stopped, boat, east_north, mission, place,
-    under_way, wait_for,
+    quiet_over, under_way, wait_for,
 };
 pub(crate) use crate::common::sitl::{SITL, ardupilot};
 
@@ -262,6 +262,11 @@ async fn four_boats_converge_follow_conventions_yield_to_the_operator_and_stop_w
         100.0 * (h - ideal) / ideal
     );
     assert!(seconds <= 240.0, "converged only after {seconds} s");
+    let quiet = quiet_over(&stations, 20_000).await;
+    println!(
+        "a2. then, over 20 s of ArduPilot's clock, each boat's mean |yaw rate| (rad/s) and mean \
+         speed over ground (m/s): {quiet:.3?}"
+    );
 
     position_errors.sort_by(f64::total_cmp);
     heading_errors.sort_by(f64::total_cmp);

@@ -443,3 +443,36 @@ pub fn mission(dir: &Path) -> PathBuf {
     std::fs::write(&path, mission_toml()).unwrap();
     path
 }
+
+/// How still the boats are from now over the next `ms` of ArduPilot's
+/// clock, from their own telemetry: each boat's mean |yaw rate| (ATTITUDE,
+/// rad/s) and mean speed over ground (GLOBAL_POSITION_INT, m/s). A
+/// measurement for docs/ardupilot.md, not a bound.
+pub async fn quiet_over(stations: &[Station], ms: u32) -> Vec<(f64, f64)> {
+    let from: Vec<u32> = stations.iter().map(|s| s.seen(Seen::clock_ms)).collect();
+    wait_for(Duration::from_secs(60), async || {
+        stations
+            .iter()
+            .zip(&from)
+            .all(|(s, t0)| s.seen(Seen::clock_ms) >= t0 + ms)
+            .then_some(())
+    })
+    .await
+    .expect("the boats' clocks advance");
+    let mean = |x: Vec<f64>| x.iter().sum::<f64>() / x.len().max(1) as f64;
+    stations
+        .iter()
+        .zip(&from)
+        .map(|(s, t0)| {
+            s.seen(|s| {
+                let r = s
+                    .attitudes
+                    .range(t0..)
+                    .map(|(_, (_, rate))| f64::from(*rate).abs());
+                let v = (s.positions.range(t0..))
+                    .map(|(_, p)| f64::from(p.vx).hypot(f64::from(p.vy)) / 100.0);
+                (mean(r.collect()), mean(v.collect()))
+            })
+        })
+        .collect()
+}
