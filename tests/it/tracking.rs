@@ -112,7 +112,7 @@ async fn the_demo_fleet_follows_its_commands() {
     // Against the coordinator's command itself: |u − u_d| ≤ |u − u_ref| +
     // |u_ref − u_d|. Each vessel declared what it can follow, so its
     // governor holds nothing much back.
-    let why = || commands_to(&recording, &lag.at.0);
+    let why = || commands_to(&recording, &lag.at.0, lag.at.1);
     println!("the vessel of the largest lag: {}", why());
     assert!(
         error.u + lag.u < BOUND,
@@ -127,18 +127,27 @@ async fn the_demo_fleet_follows_its_commands() {
 }
 
 /// What `vessel` was sent, for a failure's message: how many commands,
-/// the longest gap between two (by the recorder's clock), and the holds
-/// among them with their reasons and ticks. A command lag comes from the
+/// the longest gap between two (by the recorder's clock), the holds among
+/// them with their reasons and ticks, and (tick, u_d, u̇_d, r_d) of those
+/// within a second of mission time `around`. A command lag comes from the
 /// command line jumping; a late command (the vessel then keeps station on
-/// its own after 1 s) and a hold are the two ways it does.
-fn commands_to(recording: &Recording, vessel: &str) -> String {
+/// its own after 1 s), a hold and the safety filter's surge bound (a step
+/// in u_d) are the ways it does.
+fn commands_to(recording: &Recording, vessel: &str, around: f64) -> String {
     let mut times = Vec::new();
     let mut holds = Vec::new();
+    let mut near = Vec::new();
+    let round = |x: f64| (x * 1e3).round() / 1e3;
     for m in recording.messages(&|t| t == messages::COMMAND) {
         let m = m.unwrap();
         let c: messages::CommandRecord = serde_json::from_slice(&m.data).unwrap();
         if c.vessel == vessel {
             times.push(m.log_time);
+            // Ticks at the demo's 10 Hz.
+            if (c.tick as f64 / 10.0 - around).abs() <= 1.0 {
+                let d = &c.command;
+                near.push((c.tick, round(d.u_d), round(d.u_d_dot), round(d.r_d)));
+            }
             if let Some(reason) = c.command.hold {
                 holds.push((c.tick, reason));
             }
@@ -151,7 +160,8 @@ fn commands_to(recording: &Recording, vessel: &str) -> String {
         .unwrap_or_default();
     let start = times.first().copied().unwrap_or_default();
     format!(
-        "{vessel}: {} commands, longest gap {:.2} s from {:.2} s after the first; holds {holds:?}",
+        "{vessel}: {} commands, longest gap {:.2} s from {:.2} s after the first; holds {holds:?}; \
+         within 1 s of {around:.2} s: {near:?}",
         times.len(),
         gap as f64 * 1e-9,
         after.saturating_sub(start) as f64 * 1e-9
