@@ -135,11 +135,11 @@ impl Standing {
         self.stray.is_some()
     }
 
-    /// Ends a [`Standing::hold_stray`] hold (an operator changed the mission);
-    /// `true` when there was one.
-    pub fn unstray(&mut self, id: &str, time: f64, recorder: &Recorder) -> bool {
+    /// Ends a [`Standing::hold_stray`] hold, if there is one (an operator
+    /// changed the mission).
+    pub fn unstray(&mut self, id: &str, time: f64, recorder: &Recorder) {
         if self.stray.take().is_none() {
-            return false;
+            return;
         }
         tracing::info!(vessel = %id, "the mission was put: no longer held for following another");
         recorder.event(
@@ -147,7 +147,6 @@ impl Standing {
                 .vessel(id)
                 .code(UNKNOWN_MISSION),
         );
-        true
     }
 
     /// Judges vessel `id`'s `pose`.

@@ -51,7 +51,7 @@ use crate::mission::scenario::evaluation_document;
 use crate::mission::{ChangeResult, Mission, MissionChange, MissionClock};
 use crate::protocol::{
     ActuatorDocument, AgilityDocument, CommandDocument, CoordinatorMessage, CoverageDocument,
-    CoverageHistoryDocument, PoseDocument, SnapshotDocument, VesselStatusDocument,
+    CoverageHistoryDocument, MissionDocument, PoseDocument, SnapshotDocument, VesselStatusDocument,
 };
 use crate::recorder::messages::{EventKind, EventRecord};
 use crate::recorder::{Entry as RecorderEntry, Recorder};
@@ -117,9 +117,9 @@ pub struct Welcomed {
 /// its document's JSON, in hex. The same mission has the same name on any
 /// coordinator (a restarted one given the same `--config`), so only a
 /// different mission makes a vessel's hello disagree.
-pub fn mission_name(mission: &Mission) -> String {
+pub fn mission_name(document: &MissionDocument) -> String {
     use sha1::Digest;
-    let json = serde_json::to_vec(&mission.document()).expect("a mission document serializes");
+    let json = serde_json::to_vec(document).expect("a mission document serializes");
     sha1::Sha1::digest(&json)[..8]
         .iter()
         .map(|b| format!("{b:02x}"))
@@ -293,6 +293,7 @@ impl Coordinator {
                 cells: Vec::new(),
             },
         });
+        let name = mission_name(&empty.document.mission);
         let (tx, rx) = watch::channel(Arc::new(Snapshot {
             state: empty,
             history: history.document(),
@@ -309,7 +310,7 @@ impl Coordinator {
                 live_before: BTreeSet::new(),
                 lapsed: BTreeSet::new(),
                 history,
-                name: mission_name(&mission),
+                name,
                 mission,
                 provisional: false,
             },

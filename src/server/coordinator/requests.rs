@@ -101,9 +101,10 @@ impl Coordinator {
             })?;
         }
         self.mission = next;
-        self.name = mission_name(&self.mission);
+        let document = self.mission.document();
+        self.name = mission_name(&document);
         let time = self.time();
-        self.recorder.mission(time, self.mission.document());
+        self.recorder.mission(time, document);
         // An operator's act makes the mission the fleet's: vessels held
         // for following another take this one.
         let released = std::mem::take(&mut self.provisional);

@@ -254,11 +254,11 @@ fn the_watch_carries_a_bounded_history_from_the_first_tick() {
 fn a_provisional_mission_holds_a_vessel_that_follows_another_until_a_change() {
     let mission = Mission::paper();
     let mut c = coordinator(&mission).provisional();
-    let ours = mission_name(&mission);
+    let ours = mission_name(&mission.document());
     assert_eq!(ours.len(), 16);
     assert_eq!(
         ours,
-        mission_name(&Mission::paper()),
+        mission_name(&Mission::paper().document()),
         "a name is the mission's alone"
     );
     let hello = |c: &mut Coordinator, id: &str, followed: Option<&str>| {
