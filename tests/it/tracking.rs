@@ -25,11 +25,13 @@ const SECONDS: u64 = 120;
 const SETTLE: f64 = 20.0;
 const BOUND: f64 = 0.05;
 
+/// The largest u and r, each with the vessel and the time of its pose.
 #[derive(Debug, Default)]
 struct Worst {
     u: f64,
     r: f64,
-    at: (String, f64, f64),
+    u_at: (String, f64),
+    r_at: (String, f64),
 }
 
 /// The largest `key` ({u, r}) in the telemetry of every pose after SETTLE.
@@ -45,11 +47,11 @@ fn worst(poses: &[PoseRecord], key: &str) -> Worst {
         let (u, r) = (pair["u"].as_f64().unwrap(), pair["r"].as_f64().unwrap());
         if u > w.u {
             w.u = u;
-            w.at = (p.vessel.clone(), p.pose.t, w.at.2);
+            w.u_at = (p.vessel.clone(), p.pose.t);
         }
         if r > w.r {
             w.r = r;
-            w.at = (p.vessel.clone(), w.at.1, p.pose.t);
+            w.r_at = (p.vessel.clone(), p.pose.t);
         }
     }
     w
@@ -112,24 +114,49 @@ async fn the_demo_fleet_follows_its_commands() {
     // Against the coordinator's command itself: |u − u_d| ≤ |u − u_ref| +
     // |u_ref − u_d|. Each vessel declared what it can follow, so its
     // governor holds nothing much back.
-    let why = || commands_to(&recording, &lag.at.0, lag.at.1);
-    println!("the vessel of the largest lag: {}", why());
+    let why = |(vessel, t): &(String, f64)| {
+        format!(
+            "{}; its lags over 0.01 from 5 s before to 1 s after: {:?}",
+            commands_to(&recording, vessel, *t),
+            lags_of(&poses, vessel, *t)
+        )
+    };
+    println!(
+        "the vessel of the largest surge lag: {}\nof the largest yaw-rate lag: {}",
+        why(&lag.u_at),
+        why(&lag.r_at)
+    );
     assert!(
         error.u + lag.u < BOUND,
         "surge against the command: {error:?} + {lag:?}; {}",
-        why()
+        why(&lag.u_at)
     );
     assert!(
         error.r + lag.r < BOUND,
         "yaw rate against the command: {error:?} + {lag:?}; {}",
-        why()
+        why(&lag.r_at)
     );
+}
+
+/// (t, lag u, lag r) of `vessel`'s poses from 5 s before `around` to 1 s
+/// after, where either lag is over 0.01, before the settling time too:
+/// when the lag began and whether it was building or decaying.
+fn lags_of(poses: &[PoseRecord], vessel: &str, around: f64) -> Vec<(f64, f64, f64)> {
+    poses
+        .iter()
+        .filter(|p| p.vessel == vessel && (-5.0..=1.0).contains(&(p.pose.t - around)))
+        .filter_map(|p| {
+            let lag = &p.pose.telemetry.as_ref()?["command_lag"];
+            Some((p.pose.t, lag["u"].as_f64()?, lag["r"].as_f64()?))
+        })
+        .filter(|(_, u, r)| u.max(*r) > 0.01)
+        .collect()
 }
 
 /// What `vessel` was sent, for a failure's message: how many commands,
 /// the longest gap between two (by the recorder's clock), the holds among
 /// them with their reasons and ticks, and (tick, u_d, u̇_d, r_d) of those
-/// within a second of mission time `around`. A command lag comes from the
+/// from 5 s of mission time before `around` to 1 s after. A command lag comes from the
 /// command line jumping; a late command (the vessel then keeps station on
 /// its own after 1 s), a hold and the safety filter's surge bound (a step
 /// in u_d) are the ways it does.
@@ -144,7 +171,7 @@ fn commands_to(recording: &Recording, vessel: &str, around: f64) -> String {
         if c.vessel == vessel {
             times.push(m.log_time);
             // Ticks at the demo's 10 Hz.
-            if (c.tick as f64 / 10.0 - around).abs() <= 1.0 {
+            if (-5.0..=1.0).contains(&(c.tick as f64 / 10.0 - around)) {
                 let d = &c.command;
                 near.push((c.tick, round(d.u_d), round(d.u_d_dot), round(d.r_d)));
             }
@@ -161,7 +188,7 @@ fn commands_to(recording: &Recording, vessel: &str, around: f64) -> String {
     let start = times.first().copied().unwrap_or_default();
     format!(
         "{vessel}: {} commands, longest gap {:.2} s from {:.2} s after the first; holds {holds:?}; \
-         within 1 s of {around:.2} s: {near:?}",
+         from 5 s before {around:.2} s to 1 s after: {near:?}",
         times.len(),
         gap as f64 * 1e-9,
         after.saturating_sub(start) as f64 * 1e-9
