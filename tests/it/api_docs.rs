@@ -1009,6 +1009,7 @@ fn the_peer_wire_schema_accepts_the_real_documents() {
             .into(),
             received: 1523,
             split: revision.map(|_| vec!["usv-5".to_string(), "usv-6".to_string()]),
+            split_water: revision.map(|_| seacover::protocol::peer::SplitWater::Own),
             alone: revision.is_none(),
         })
         .unwrap()

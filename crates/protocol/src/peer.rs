@@ -77,6 +77,14 @@ pub struct PeerMissionDocument {
 
 /// `seacover/<fleet>/status/<id>`: what one member hears and what it
 /// refused, for dashboards and tests.
+/// What a group covers while it follows a split's plan.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum SplitWater {
+    Region,
+    Own,
+}
+
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct PeerStatusDocument {
     pub id: String,
@@ -107,6 +115,13 @@ pub struct PeerStatusDocument {
     /// "What each loss does"): the other group's ids; `null` otherwise.
     #[serde(default)]
     pub split: Option<Vec<String>>,
+    /// What its group covers while it follows a split's plan: `region`
+    /// (the whole region, the other group's water traded by the plan's
+    /// ways) or `own` (only its own water, the other group held where it
+    /// fell silent: the ways to cover the region were not clear); `null`
+    /// otherwise.
+    #[serde(default)]
+    pub split_water: Option<SplitWater>,
     /// It hears no other vessel of the fleet and holds station (without
     /// `--alone`).
     #[serde(default)]

@@ -28,7 +28,8 @@ use crate::agent::VesselConfig;
 use crate::agent::onboard::Onboard;
 use crate::control::barrier::Scratch;
 use crate::control::guidance::Guidance;
-use crate::protocol::peer::PeerStatusDocument;
+use crate::coverage::split::Water;
+use crate::protocol::peer::{PeerStatusDocument, SplitWater};
 
 /// Seconds since 1970 by this machine's (disciplined) clock.
 pub fn utc_now() -> f64 {
@@ -653,8 +654,9 @@ fn log_split(id: &str, t: f64, change: &Change) {
             others,
             closest,
             duration,
+            water,
         } => tracing::info!(
-            vessel = %id, t, ?others, closest, duration,
+            vessel = %id, t, ?others, closest, duration, ?water,
             "fleet split: following the plan both groups compute"
         ),
         Change::Refused { others, closest } => tracing::warn!(
@@ -686,6 +688,10 @@ fn status_document(
         quarantined: table.quarantined(),
         received: table.received(),
         split: split.others(),
+        split_water: split.water().map(|w| match w {
+            Water::Region => SplitWater::Region,
+            Water::Own => SplitWater::Own,
+        }),
         alone: false,
         partition_since: None,
     }

@@ -50,7 +50,7 @@ use super::table::{Ageing, Neighbour};
 use crate::control::Vec3;
 use crate::control::model::State;
 use crate::coverage::Vessel;
-use crate::coverage::split::{self, SplitParams, SplitPlan};
+use crate::coverage::split::{self, SplitParams, SplitPlan, Water};
 use crate::geometry::{Point, norm2};
 use crate::mission::Mission;
 
@@ -106,6 +106,7 @@ pub enum Change {
         others: Vec<String>,
         closest: f64,
         duration: f64,
+        water: Water,
     },
     /// Groups that fell silent together, but the plan's ways were not clear
     /// of each other or of the shore (`closest`: between the groups).
@@ -148,6 +149,11 @@ impl Split {
     /// The other group's ids while a plan is followed.
     pub fn others(&self) -> Option<Vec<String>> {
         self.active.as_ref().map(|a| a.ids[1 - a.me.0].clone())
+    }
+
+    /// What this vessel's group covers while a plan is followed.
+    pub fn water(&self) -> Option<Water> {
+        self.active.as_ref().map(|a| a.plan.water)
     }
 
     /// Looks at this tick: starts, keeps or ends a plan, and gives the
@@ -285,7 +291,7 @@ impl Split {
         } else {
             0.0
         };
-        let duration = plan.duration;
+        let (duration, water) = (plan.duration, plan.water);
         self.active = Some(Active {
             revision,
             ids,
@@ -298,6 +304,7 @@ impl Split {
             others: other_ids,
             closest,
             duration,
+            water,
         }
     }
 }
@@ -507,6 +514,40 @@ mod tests {
             for q in b {
                 let (p, q) = (find(1, &format!("usv-{p}")), find(0, &format!("usv-{q}")));
                 assert!(norm2(p - q).sqrt() >= 9.0 - 1e-6);
+            }
+        }
+    }
+
+    /// The paper fleet cut 5 | 3 at its joint optimum: no ways clear the
+    /// groups' own optima, so both sides keep to their own water, where
+    /// they are, and each knows the other stays.
+    #[test]
+    fn a_cut_without_clear_ways_keeps_each_group_to_its_own_water() {
+        let mission = Mission::paper();
+        let ageing = Ageing::default();
+        let first = ageing.stale_after + TOGETHER + 0.05;
+        let (a, b) = ([1, 2, 3, 4, 5], [6, 7, 8]);
+        for (me, silent) in [(2, &b[..]), (7, &a[..])] {
+            let mut split = Split::default();
+            let (id, at) = (format!("usv-{me}"), own(me));
+            let neighbours = seen(me, silent, first);
+            let (orders, change) =
+                split.update(&tick(&mission, &ageing, &id, &at, &neighbours, 10.0));
+            let Change::Started { water, closest, .. } = change else {
+                panic!("{id}: {change:?}");
+            };
+            assert_eq!(water, Water::Own, "{id}");
+            assert_eq!(split.water(), Some(Water::Own));
+            assert!(closest >= 9.0 - 1e-6, "{closest}");
+            let (orders_late, _) =
+                split.update(&tick(&mission, &ageing, &id, &at, &neighbours, 1000.0));
+            for o in [orders.unwrap(), orders_late.unwrap()] {
+                assert!(norm2(o.target - Point { x: at.x, y: at.y }).sqrt() < 0.05);
+                for (other, s) in &o.others {
+                    let i: usize = other[4..].parse().unwrap();
+                    let (x, y) = AT[i - 1];
+                    assert!((s.x - x).hypot(s.y - y) < 0.05, "{other}");
+                }
             }
         }
     }

@@ -215,6 +215,28 @@ pub fn lloyd_in(base: &Value, at: &[Pos]) -> (f64, usize, Vec<Pos>) {
     panic!("Lloyd's iteration from {at:?} did not settle in 2000 steps")
 }
 
+/// Lloyd's iteration of `at` among `held`, who keep their places (a group
+/// that keeps to its own water, docs/peer.md): H of all there, the
+/// iterations, and where `at` ends.
+pub fn lloyd_among(at: &[Pos], held: &[Pos]) -> (f64, usize, Vec<Pos>) {
+    let mut all: Vec<Pos> = [at, held].concat();
+    for i in 1..=2000 {
+        let eval = evaluate(&all);
+        let mut moved: f64 = 0.0;
+        for p in &mut all[..at.len()] {
+            let (cx, cy) = eval.centroids[&p.id];
+            moved = moved.max((p.x - cx).hypot(p.y - cy));
+            (p.x, p.y) = (cx, cy);
+        }
+        if moved < 1e-3 {
+            let h = evaluate(&all).h;
+            all.truncate(at.len());
+            return (h, i, all);
+        }
+    }
+    panic!("Lloyd's iteration of {at:?} among {held:?} did not settle in 2000 steps")
+}
+
 /// The final H of `seacover sim --scenario paper` (200 s, safety on), run
 /// once per test process.
 pub fn centralized_h() -> f64 {

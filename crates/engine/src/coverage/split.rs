@@ -42,6 +42,14 @@
 //!    Where no delay up to [`SplitParams::waits`] clears a vessel (after it
 //!    has been moved to the front of the order once) the plan is not
 //!    [`SplitPlan::clear`], and the caller does not follow it.
+//! 4. When the ways of step 3 are not clear, each group keeps to its own
+//!    water instead ([`Water::Own`]): steps 1 to 3 again, with each
+//!    group's optimum that of Lloyd's iteration among its own vessels and
+//!    the other group's held where they were at the cut (so a group at the
+//!    joint optimum stays where it is). It is what both readings of the
+//!    silence allow: if the other group is cut off it covers its own water,
+//!    and if it is wrecks they are never approached; the cost is that a
+//!    wreck's water stays uncovered while the plan lasts.
 //!
 //! Pure and deterministic; it cannot fail once the inputs are valid (a
 //! vessel that Lloyd's iteration would carry out of the region is kept at
@@ -93,10 +101,21 @@ impl SplitParams {
     }
 }
 
+/// What each group of a plan covers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Water {
+    /// The whole region (steps 1 to 3 of the module doc).
+    Region,
+    /// Its own water, the other group held where it was (step 4).
+    Own,
+}
+
 /// Where every vessel of both groups starts and ends, in the groups' order,
 /// and when it leaves.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SplitPlan {
+    /// What each group covers.
+    pub water: Water,
     pub start: [Vec<Point>; 2],
     pub end: [Vec<Point>; 2],
     /// Each group's own optimum before the pushes (step 1).
@@ -225,7 +244,29 @@ pub fn plan(
     if groups.iter().any(|g| g.is_empty()) {
         return None;
     }
-    let optimum = groups.map(|g| lloyd(region, risk, g, params));
+    let whole = plan_for(region, risk, groups, params, Water::Region);
+    if whole.clear {
+        return Some(whole);
+    }
+    let own = plan_for(region, risk, groups, params, Water::Own);
+    Some(if own.clear { own } else { whole })
+}
+
+/// Steps 1 to 3 for `water`.
+fn plan_for(
+    region: &Region,
+    risk: &RiskField,
+    groups: [&[Vessel]; 2],
+    params: &SplitParams,
+    water: Water,
+) -> SplitPlan {
+    let optimum = match water {
+        Water::Region => groups.map(|g| lloyd(region, risk, g, &[], params)),
+        Water::Own => [
+            lloyd(region, risk, groups[0], groups[1], params),
+            lloyd(region, risk, groups[1], groups[0], params),
+        ],
+    };
     let start = groups.map(|g| g.iter().map(|v| v.position).collect::<Vec<_>>());
     let mut end = optimum.clone();
     push_apart(region, &start, &mut end, params);
@@ -234,7 +275,8 @@ pub fn plan(
         .flat_map(|g| (0..start[g].len()).map(move |i| (g, i)))
         .map(|(g, i)| Way::new(start[g][i], end[g][i], delay[g][i], params.speed).arrive)
         .fold(0.0, f64::max);
-    Some(SplitPlan {
+    SplitPlan {
+        water,
         start,
         end,
         optimum,
@@ -242,7 +284,7 @@ pub fn plan(
         speed: params.speed,
         duration,
         clear,
-    })
+    }
 }
 
 /// Step 3 of the module doc: each vessel's delay, and whether they clear
@@ -322,9 +364,16 @@ fn delays(
     (failed, delay)
 }
 
-/// A group's own optimum by Lloyd's iteration from where it is.
-fn lloyd(region: &Region, risk: &RiskField, group: &[Vessel], params: &SplitParams) -> Vec<Point> {
-    let mut vessels = group.to_vec();
+/// A group's own optimum by Lloyd's iteration from where it is, among
+/// `held` vessels that keep their places (none: the whole region).
+fn lloyd(
+    region: &Region,
+    risk: &RiskField,
+    group: &[Vessel],
+    held: &[Vessel],
+    params: &SplitParams,
+) -> Vec<Point> {
+    let mut vessels = [group, held].concat();
     for _ in 0..params.steps {
         // Positions stay inside the region (centroids of cells in it), so
         // the fleet stays valid.
@@ -333,7 +382,7 @@ fn lloyd(region: &Region, risk: &RiskField, group: &[Vessel], params: &SplitPara
         };
         let evaluation = evaluate(region, risk, &fleet, &Options::default());
         let mut moved: f64 = 0.0;
-        for (v, c) in vessels.iter_mut().zip(&evaluation.cells) {
+        for (v, c) in vessels.iter_mut().zip(&evaluation.cells).take(group.len()) {
             moved = moved.max(norm2(c.centroid - v.position).sqrt());
             v.position = c.centroid;
         }
@@ -341,7 +390,7 @@ fn lloyd(region: &Region, risk: &RiskField, group: &[Vessel], params: &SplitPara
             break;
         }
     }
-    vessels.iter().map(|v| v.position).collect()
+    vessels[..group.len()].iter().map(|v| v.position).collect()
 }
 
 /// Step 2 of the module doc.
@@ -593,6 +642,51 @@ mod tests {
         // Without the delay they would meet.
         let w = Way::new(start[1][0], end[1][0], 0.0, 1.0);
         assert!(least_between(&u, &w) < 1.0);
+    }
+
+    /// A fleet cut at its joint optimum whose ways would cross keeps to
+    /// its own water: nobody moves, and the plan is clear.
+    #[test]
+    fn at_the_joint_optimum_each_group_keeping_its_own_water_stays_put() {
+        let region = square(false);
+        let risk = RiskField::new(
+            0.1,
+            vec![RiskObject {
+                center: Point { x: 35.0, y: 60.0 },
+                alpha: 5.0,
+                sigma: 20.0,
+            }],
+        )
+        .unwrap();
+        let params = SplitParams::both(9.0, 0.5);
+        let starts = [
+            vessel(15.0, 20.0),
+            vessel(40.0, 85.0),
+            vessel(80.0, 30.0),
+            vessel(60.0, 60.0),
+            vessel(25.0, 55.0),
+        ];
+        let joint = lloyd(&region, &risk, &starts, &[], &params);
+        let at: Vec<Vessel> = joint.iter().map(|p| vessel(p.x, p.y)).collect();
+        let (a, b) = at.split_at(3);
+        let own = plan_for(&region, &risk, [a, b], &params, Water::Own);
+        assert!(own.clear);
+        for g in 0..2 {
+            for (end, start) in own.end[g].iter().zip(&own.start[g]) {
+                assert!(norm2(*end - *start).sqrt() < 0.01, "{end:?} {start:?}");
+            }
+        }
+        // `plan` takes it only when the whole region's ways are not clear.
+        let chosen = plan(&region, &risk, [a, b], &params).unwrap();
+        let whole = plan_for(&region, &risk, [a, b], &params, Water::Region);
+        assert_eq!(
+            chosen.water,
+            if whole.clear {
+                Water::Region
+            } else {
+                Water::Own
+            }
+        );
     }
 
     /// The same inputs give the same plan, bit for bit (both groups compute
