@@ -55,6 +55,9 @@ pub struct LinkConfig {
     pub astern: Option<bool>,
     /// Said in the hello: the command rates the vessel can follow.
     pub agility: Option<AgilityDocument>,
+    /// Said in the hello: the vessel keeps station by itself within this
+    /// of its goal [m].
+    pub station_radius: Option<f64>,
 }
 
 /// The WebSocket URL of a coordinator's vessel link from its base URL
@@ -230,6 +233,7 @@ pub async fn run(
             astern: config.astern,
             agility: config.agility,
             mission: following.clone(),
+            station_radius: config.station_radius,
         };
         tracing::info!(vessel = %config.vessel, url = %config.url, "connecting to the coordinator");
         let connected = tokio::select! {

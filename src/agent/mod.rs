@@ -198,6 +198,9 @@ async fn run_vessel(
                     surge_accel: a.surge_accel,
                 }
             }),
+            // The simulated hull keeps station with the coordinator's
+            // commands (the keeper's own surge and aim).
+            station_radius: None,
         },
         pose_slot,
         commands,

@@ -265,6 +265,7 @@ mod tests {
                 e: 0.0,
                 psi_e: 0.0,
                 hold: None,
+                station: None,
             };
             vessel.command = Some((c, vessel.t));
             vessel.advance(0.1);

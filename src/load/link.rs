@@ -93,6 +93,7 @@ pub(super) fn hello(id: &str) -> VesselMessage {
         astern: None,
         agility: None,
         mission: None,
+        station_radius: None,
     }
 }
 

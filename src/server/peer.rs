@@ -453,6 +453,7 @@ async fn register(
             astern: true,
             agility: None,
             mission: None,
+            station_radius: None,
             tx,
             poses: slot,
             reply,

@@ -201,7 +201,7 @@ async fn run_link(mut socket: WebSocket, app: AppState, peer: Option<SocketAddr>
         _ = app.shutdown.cancelled() => return,
         first = tokio::time::timeout(Duration::from_secs(10), socket.recv()) => first,
     };
-    let (id, actuator, astern, agility, mission) = match hello {
+    let (id, actuator, astern, agility, mission, station_radius) = match hello {
         Ok(Some(Ok(Message::Text(t)))) => match parse(&t) {
             Ok(VesselMessage::Hello {
                 vessel,
@@ -210,6 +210,7 @@ async fn run_link(mut socket: WebSocket, app: AppState, peer: Option<SocketAddr>
                 astern,
                 agility,
                 mission,
+                station_radius,
             }) => {
                 if protocol != 1 {
                     return refuse_hello(
@@ -233,7 +234,7 @@ async fn run_link(mut socket: WebSocket, app: AppState, peer: Option<SocketAddr>
                     )
                     .await;
                 }
-                (vessel, actuator, astern, agility, mission)
+                (vessel, actuator, astern, agility, mission, station_radius)
             }
             Ok(VesselMessage::Pose(_)) => {
                 return refuse_hello(socket, &app, peer, None, "protocol", "a pose before hello")
@@ -267,6 +268,7 @@ async fn run_link(mut socket: WebSocket, app: AppState, peer: Option<SocketAddr>
             astern: astern.unwrap_or(true),
             agility,
             mission,
+            station_radius,
             tx,
             poses,
             reply: reply_tx,

@@ -148,6 +148,7 @@ pub fn record(
                     e: c.e,
                     psi_e: c.psi_e,
                     hold: None,
+                    station: None,
                 }),
                 last_seen: Some(tick.t),
                 neighbours: None,

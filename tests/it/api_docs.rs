@@ -210,6 +210,7 @@ fn the_link_schema_accepts_the_real_messages() {
             astern: None,
             agility: None,
             mission: None,
+            station_radius: None,
         },
         VesselMessage::Hello {
             vessel: "usv-2".into(),
@@ -224,6 +225,7 @@ fn the_link_schema_accepts_the_real_messages() {
                 surge_accel: 0.5,
             }),
             mission: Some("3f9a0c1de2b47a65".into()),
+            station_radius: Some(3.0),
         },
         VesselMessage::Pose(pose()),
         VesselMessage::Pose(PoseDocument {
@@ -260,6 +262,7 @@ fn the_link_schema_accepts_the_real_messages() {
             e: 3.25,
             psi_e: -0.4,
             hold: None,
+            station: None,
         }),
         CoordinatorMessage::Error {
             code: "malformed".into(),

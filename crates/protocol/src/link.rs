@@ -51,6 +51,14 @@ pub enum VesselMessage {
         /// another: a fresh shore does not re-task a running fleet.
         #[serde(default, skip_serializing_if = "Option::is_none")]
         mission: Option<String>,
+        /// The vessel holds a position by itself (an autopilot's own
+        /// loiter) and may be handed its goal to hold once it is within
+        /// this many metres of it [m], > 0. Omitted: the coordinator steers
+        /// it to the end. Declared: station keeping starts within the
+        /// larger of this and the mission's `hold_radius` (unless that is
+        /// 0), and its commands say `station` while it lasts.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        station_radius: Option<f64>,
     },
     /// A pose report.
     Pose(PoseDocument),
@@ -142,4 +150,15 @@ pub struct CommandDocument {
     /// speeds are 0) until commands come without it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub hold: Option<String>,
+    /// Present while the vessel keeps station on arrival: its goal has
+    /// settled, it is within its hold radius, and the safety filter leaves
+    /// it alone (docs/api.md, "Quiet arrival"). The point it keeps (its
+    /// goal: the centroid, or the nearest point to it that keeps the
+    /// mission's margin from the shore). A vessel that holds a position by
+    /// itself (it declared `station_radius`) may then hold this point
+    /// instead of following `u_d` and `r_d`; any other follows them as
+    /// always.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[schema(value_type = Option<Vec<f64>>, min_items = 2, max_items = 2)]
+    pub station: Option<XY>,
 }

@@ -54,6 +54,10 @@ pub struct BridgeConfig {
     pub endpoints: Vec<String>,
     /// Switch each vehicle to GUIDED and arm it, once, at start.
     pub arm: bool,
+    /// Each vehicle keeps station on arrival by itself (ArduPilot's
+    /// loiter) once within this of its goal [m]; `None`: the coordinator
+    /// steers it to the end.
+    pub station_radius: Option<f64>,
     pub token: Option<String>,
     /// The vessel id of the only vehicle (instead of `mav-<sysid>`).
     pub id: Option<String>,
@@ -410,7 +414,8 @@ fn route(
     let (tx, rx) = mpsc::channel(256);
     let _ = tx.try_send(m.message.clone());
     tasks.spawn(run_vehicle(
-        Vehicle::new(sysid, m.header.component_id, *frame.borrow(), config.arm),
+        Vehicle::new(sysid, m.header.component_id, *frame.borrow(), config.arm)
+            .holding_station(config.station_radius),
         LinkConfig {
             url: url.to_string(),
             token: config.token.clone(),
@@ -423,6 +428,7 @@ fn route(
             // ATC_ACCEL_MAX); the mission's yaw_accel is the former's
             // default, so there is nothing tighter to declare.
             agility: None,
+            station_radius: config.station_radius,
         },
         rx,
         frame.clone(),

@@ -21,6 +21,10 @@
 //!   stop (speed and turn rate zero) and, once below [`SETTLED`], to hold
 //!   where it stopped (a position target there, repeated each second):
 //!   never an old velocity;
+//! - with `--station-radius R` (on by default), a command that says
+//!   `station` becomes one position target at that point, sent again only
+//!   when the point moves more than R from it: ArduPilot reaches it and
+//!   loiters there, still (docs/ardupilot.md, "Quiet arrival");
 //! - ages are measured on the vehicle's clock (`time_boot_ms`), so the rules
 //!   hold unchanged when a simulator runs faster than real time.
 
@@ -137,6 +141,12 @@ pub struct Vehicle {
     hold: Option<(LatLon, u32)>,
     /// When braking on a stale command began (vehicle time).
     braking_since: Option<u32>,
+    /// Station keeping is handed to the autopilot's own loiter (the bridge
+    /// declared this `station_radius`).
+    holds_station: Option<f64>,
+    /// The point (x, y in the mission's plane) the vehicle was last told
+    /// to keep station at.
+    station: Option<(f64, f64)>,
     arming: Arming,
     setpoints: u64,
 }
@@ -158,6 +168,8 @@ impl Vehicle {
             command: None,
             hold: None,
             braking_since: None,
+            holds_station: None,
+            station: None,
             arming: if arm {
                 Arming::Wanted { last_ms: None }
             } else {
@@ -165,6 +177,14 @@ impl Vehicle {
             },
             setpoints: 0,
         }
+    }
+
+    /// Station keeping on arrival is left to the autopilot: a command's
+    /// `station` point becomes one position target, which ArduPilot's
+    /// GUIDED mode reaches and then holds by loitering (`LOIT_RADIUS`).
+    pub fn holding_station(mut self, radius: Option<f64>) -> Vehicle {
+        self.holds_station = radius;
+        self
     }
 
     /// Armed and in GUIDED: the coordinator's commands are followed.
@@ -184,6 +204,7 @@ impl Vehicle {
     /// The mission's origin moved: later poses use the new plane.
     pub fn set_frame(&mut self, frame: LocalFrame) {
         self.frame = frame;
+        self.station = None;
     }
 
     /// Mode and arming from a HEARTBEAT; returns what to send (arming).
@@ -197,6 +218,7 @@ impl Vehicle {
             // had is forgotten, and nothing is sent until GUIDED again.
             self.hold = None;
             self.braking_since = None;
+            self.station = None;
         }
         self.arming_requests()
     }
@@ -290,15 +312,41 @@ impl Vehicle {
             return self.hold_if_stale();
         }
         let fresh = c.u_d.is_finite() && c.r_d.is_finite();
+        let station = c.station.filter(|_| self.holds_station.is_some());
         self.command = Some((c, self.clock_ms));
         if !(fresh && self.controlled()) {
             return Vec::new();
         }
         self.hold = None;
         self.braking_since = None;
+        if let Some([x, y]) = station {
+            return self.keep_station((x, y));
+        }
+        self.station = None;
         let (c, _) = self.command.as_ref().expect("just set");
         let (u_d, r_d) = (c.u_d, c.r_d);
         vec![self.velocity_setpoint(u_d, r_d)]
+    }
+
+    /// Keeps station at `point` by the autopilot's loiter: one position
+    /// target, and another only once the point has moved farther than the
+    /// station radius (as far as keeping starts from). Each target
+    /// restarts ArduPilot's navigation to it, and a boat that turns only
+    /// under way then circles the point (measured on SITL: one target a
+    /// second kept it circling 2 m out at 0.5 m/s; one target, then
+    /// nothing, left it still within 0.4 m; one each time the goal moved a
+    /// metre kept four boats nudging each other's goals, and moving).
+    fn keep_station(&mut self, (x, y): (f64, f64)) -> Vec<MavMessage> {
+        let gate = self.holds_station.unwrap_or_default();
+        if self
+            .station
+            .is_some_and(|(hx, hy)| (x - hx).hypot(y - hy) <= gate)
+        {
+            return Vec::new();
+        }
+        self.station = Some((x, y));
+        let point = self.frame.to_geodetic(x, y);
+        vec![self.position_target(point)]
     }
 
     /// The coordinator's link closed: the newest command is as good as
@@ -340,6 +388,7 @@ impl Vehicle {
             self.command = None;
             self.hold = None;
             self.braking_since = None;
+            self.station = None;
         }
         self.clock_ms = time_ms;
     }
@@ -384,22 +433,26 @@ impl Vehicle {
             return Vec::new();
         }
         self.hold = Some((point, self.clock_ms));
+        self.station = None;
+        vec![self.position_target(point)]
+    }
+
+    /// A position target at `point`, for ArduPilot's own position loop.
+    fn position_target(&mut self, point: LatLon) -> MavMessage {
         self.setpoints += 1;
-        vec![MavMessage::SET_POSITION_TARGET_GLOBAL_INT(
-            SET_POSITION_TARGET_GLOBAL_INT_DATA {
-                time_boot_ms: self.clock_ms,
-                target_system: self.sysid,
-                target_component: self.compid,
-                // The frame every ArduPilot accepts for a global target
-                // (MAVLink now prefers its synonym GLOBAL).
-                #[allow(deprecated)]
-                coordinate_frame: MavFrame::MAV_FRAME_GLOBAL_INT,
-                type_mask: PositionTargetTypemask::from_bits_truncate(POSITION_ONLY),
-                lat_int: (point.lat * 1e7).round() as i32,
-                lon_int: (point.lon * 1e7).round() as i32,
-                ..Default::default()
-            },
-        )]
+        MavMessage::SET_POSITION_TARGET_GLOBAL_INT(SET_POSITION_TARGET_GLOBAL_INT_DATA {
+            time_boot_ms: self.clock_ms,
+            target_system: self.sysid,
+            target_component: self.compid,
+            // The frame every ArduPilot accepts for a global target
+            // (MAVLink now prefers its synonym GLOBAL).
+            #[allow(deprecated)]
+            coordinate_frame: MavFrame::MAV_FRAME_GLOBAL_INT,
+            type_mask: PositionTargetTypemask::from_bits_truncate(POSITION_ONLY),
+            lat_int: (point.lat * 1e7).round() as i32,
+            lon_int: (point.lon * 1e7).round() as i32,
+            ..Default::default()
+        })
     }
 
     /// With `--arm`: GUIDED first, then arm, once a second of vehicle time

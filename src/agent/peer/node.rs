@@ -709,5 +709,6 @@ fn hold(tick: u64, own: &crate::control::model::State) -> crate::protocol::Comma
         e: 0.0,
         psi_e: 0.0,
         hold: Some("hears no other vessel of the fleet".into()),
+        station: None,
     }
 }

@@ -173,6 +173,9 @@ pub fn step(
             e: cmd.e,
             psi_e: cmd.psi_e,
             hold: None,
+            station: guidance
+                .keeping_station()
+                .then_some([safe.towards.x, safe.towards.y]),
         },
         cell,
         partition,

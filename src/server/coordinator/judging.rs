@@ -249,6 +249,7 @@ impl Standing {
             e: 0.0,
             psi_e: 0.0,
             hold: Some(reason),
+            station: None,
         })
     }
 }

@@ -71,6 +71,9 @@ pub enum Request {
         agility: Option<AgilityDocument>,
         /// The mission it says it follows (its hello's `mission`).
         mission: Option<String>,
+        /// Within this of its goal it holds a position by itself (its
+        /// hello's `station_radius`).
+        station_radius: Option<f64>,
         tx: mpsc::Sender<Outgoing>,
         /// The link's newest pose. A slot rather than a request per pose:
         /// the tick only ever wants the newest, and 1000 vessels at 20 Hz
@@ -102,6 +105,7 @@ struct Hello {
     astern: bool,
     agility: Option<AgilityDocument>,
     mission: Option<String>,
+    station_radius: Option<f64>,
 }
 
 /// What a registered link says in its welcome.
@@ -438,6 +442,7 @@ impl Coordinator {
                 astern,
                 agility,
                 mission,
+                station_radius,
                 tx,
                 poses,
                 reply,
@@ -447,6 +452,7 @@ impl Coordinator {
                     astern,
                     agility,
                     mission,
+                    station_radius,
                 };
                 let name = self.name.clone();
                 let welcomed = self.register(id, hello).map(|entry| {

@@ -11,6 +11,11 @@ use crate::control::guidance::{Agility, Guidance};
 use crate::mission::{ChangeResult, MissionChange};
 use crate::protocol::{AgilityDocument, CoordinatorMessage};
 
+/// The largest `station_radius` a hello may declare [m]: a vessel handed
+/// its goal from farther would cross water the coordinator no longer
+/// steers it through.
+const MAX_STATION_RADIUS: f64 = 20.0;
+
 fn agility(declared: Option<AgilityDocument>) -> Result<Agility, ApiError> {
     let Some(a) = declared else {
         return Ok(Agility::UNDECLARED);
@@ -33,6 +38,13 @@ impl Coordinator {
     pub(super) fn register(&mut self, id: String, hello: Hello) -> Result<&mut Entry, ApiError> {
         let actuator = hello.actuator.unwrap_or(self.mission.actuator);
         let agility = agility(hello.agility)?;
+        if let Some(r) = hello.station_radius
+            && !(r.is_finite() && r > 0.0 && r <= MAX_STATION_RADIUS)
+        {
+            return Err(ApiError::Invalid(format!(
+                "station_radius: must be a finite number in (0, {MAX_STATION_RADIUS}] m, got {r}"
+            )));
+        }
         // The engine's bounds: a vessel outside them would make every
         // tick's fleet invalid. Vessels may have different β (cells with
         // curved edges).
@@ -74,6 +86,7 @@ impl Coordinator {
         entry.actuator = actuator;
         entry.guidance.ahead_only = !hello.astern;
         entry.guidance.agility = agility;
+        entry.guidance.station_radius = hello.station_radius;
         if let Some(followed) = hello.mission.as_deref()
             && self.provisional
             && followed != self.name

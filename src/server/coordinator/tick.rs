@@ -189,6 +189,10 @@ impl Coordinator {
                 e: cmd.e,
                 psi_e: cmd.psi_e,
                 hold: None,
+                station: entry
+                    .guidance
+                    .keeping_station()
+                    .then_some([sc.towards.x, sc.towards.y]),
             };
             if let Some(link) = &entry.link {
                 send_command(link, &doc, due, &written);

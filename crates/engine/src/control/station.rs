@@ -56,6 +56,11 @@
 //! 0.2 m, a mission setting); measured in docs/reproducing-the-paper.md
 //! ("Quiet arrival").
 //!
+//! A vessel that holds a position by itself (an ArduPilot boat's loiter,
+//! [`Look::holds_itself`]) is handed its goal instead of the keeper's
+//! commands, and handed it again when the goal moves: for it keeping
+//! starts below [`SETTLED_HELD`] and only distance ends it.
+//!
 //! Invariant: the keeper's commands are bounded by [`AIM_RATE`] and
 //! [`KEEP_SPEED`] and go through the same command line (continuity, rate
 //! bounds, the filter's surge bound) as the `course` law's.
@@ -98,6 +103,13 @@ pub const COAST: f64 = 5.0;
 const HOLD_RATE: f64 = 0.02;
 /// A goal moving slower than this [m/s] has settled: keeping may start.
 pub const SETTLED: f64 = 0.01;
+/// The same for a vessel that holds a position by itself (an autopilot's
+/// loiter, handed its goal again whenever it has moved a metre): its
+/// neighbours' boats, which turn only under way, circle their goals
+/// until they hold too, and move the goals by centimetres a second
+/// meanwhile (measured on SITL: 0.05–0.2 m/s), so the threshold that
+/// waits for a simulated fleet to settle would never be met.
+pub const SETTLED_HELD: f64 = 0.1;
 /// A goal moving faster than this [m/s] is left to the `course` law: the
 /// fleet is moving again, and the keeper's slow turns would lag it.
 pub const UNSETTLED: f64 = 0.03;
@@ -123,6 +135,10 @@ pub struct Look<'a> {
     pub yielding: bool,
     /// The hull cannot go astern.
     pub ahead_only: bool,
+    /// The vessel holds a position by itself, handed its goal: keeping
+    /// starts below [`SETTLED_HELD`] and a moving goal does not end it
+    /// (the vessel is handed the goal again as it moves).
+    pub holds_itself: bool,
 }
 
 /// Where a vessel is in keeping station.
@@ -171,6 +187,7 @@ impl Phase {
             t,
             yielding,
             ahead_only,
+            holds_itself,
         } = *look;
         let (wx, wy) = state.ground_velocity();
         let speed = wx.hypot(wy);
@@ -179,14 +196,14 @@ impl Phase {
         if yielding || hold_radius <= 0.0 {
             // Keeping clear is never faded in.
             *self = Phase::Free;
-        } else if keeps && (e > 2.0 * hold_radius || goal_speed > UNSETTLED) {
+        } else if keeps && (e > 2.0 * hold_radius || (!holds_itself && goal_speed > UNSETTLED)) {
             *self = Phase::Returning { since: t };
         }
         loop {
             match *self {
                 Phase::Free | Phase::Returning { .. }
                     if e < hold_radius
-                        && goal_speed < SETTLED
+                        && goal_speed < if holds_itself { SETTLED_HELD } else { SETTLED }
                         && !yielding
                         && hold_radius > 0.0 =>
                 {
@@ -318,6 +335,7 @@ mod tests {
             t: 0.0,
             yielding,
             ahead_only,
+            holds_itself: false,
         }
     }
 

@@ -62,6 +62,7 @@ fn command(u_d: f64, r_d: f64) -> CommandDocument {
         e: 1.0,
         psi_e: 0.0,
         hold: None,
+        station: None,
     }
 }
 
@@ -335,4 +336,79 @@ fn the_fix_follows_gps_raw_int_and_the_ekf() {
     // A GPS glitch flagged by the estimator.
     v.on_ekf_status(&ekf(0x33f | EkfStatusFlags::EKF_GPS_GLITCHING.bits()));
     assert_eq!(v.fix(), Some(FixDocument::Estimator));
+}
+
+/// Quiet arrival: a command that says `station` becomes one position
+/// target there, not repeated while the point stays within the station
+/// radius nor
+/// while the command stays fresh; a point moved past the gate is sent
+/// again; a command without `station` is a velocity again. A bridge that
+/// did not declare it follows the velocity as always.
+#[test]
+fn a_station_point_is_sent_once_and_again_only_when_it_moves() {
+    const GATE: f64 = 3.0;
+    let keeping = |x: f64, y: f64| CommandDocument {
+        station: Some([x, y]),
+        ..command(0.05, 0.0)
+    };
+    let mut plain = vehicle(false);
+    plain.on_heartbeat(&heartbeat(GUIDED, true));
+    assert!(matches!(
+        plain.on_command(keeping(50.0, 100.0)).as_slice(),
+        [MavMessage::SET_POSITION_TARGET_LOCAL_NED(_)]
+    ));
+
+    let mut v = vehicle(false).holding_station(Some(GATE));
+    v.on_heartbeat(&heartbeat(GUIDED, true));
+    v.on_attitude(&attitude(1000)).unwrap();
+    v.on_position(&position(1000)).unwrap();
+    let out = v.on_command(keeping(50.0, 100.0));
+    let [MavMessage::SET_POSITION_TARGET_GLOBAL_INT(target)] = out.as_slice() else {
+        panic!("expected a position target, got {out:?}")
+    };
+    assert_eq!(target.type_mask.bits(), POSITION_ONLY);
+    let frame = LocalFrame::new(ORIGIN).unwrap();
+    let there = LatLon {
+        lat: f64::from(target.lat_int) * 1e-7,
+        lon: f64::from(target.lon_int) * 1e-7,
+    };
+    let (x, y) = frame.to_local(there);
+    assert!(
+        (x - 50.0).abs() < 0.02 && (y - 100.0).abs() < 0.02,
+        "{x} {y}"
+    );
+    // Ten seconds of fresh commands at a point that wanders within the
+    // gate: nothing more is sent, and the command never goes stale.
+    for k in 1..=100u32 {
+        let t = 1000 + 100 * k;
+        v.on_position(&position(t)).unwrap();
+        let wander = 0.5 * GATE * (f64::from(k) * 0.3).sin();
+        assert!(
+            v.on_command(keeping(50.0 + wander, 100.0)).is_empty(),
+            "{k}"
+        );
+        assert!(v.on_position(&position(t + 50)).unwrap().1.is_empty());
+    }
+    let moved = v.on_command(keeping(50.0 + 1.5 * GATE, 100.0));
+    assert!(matches!(
+        moved.as_slice(),
+        [MavMessage::SET_POSITION_TARGET_GLOBAL_INT(_)]
+    ));
+    // Keeping over: a velocity again; keeping again: a target again.
+    assert!(matches!(
+        v.on_command(command(1.0, 0.1)).as_slice(),
+        [MavMessage::SET_POSITION_TARGET_LOCAL_NED(_)]
+    ));
+    assert!(matches!(
+        v.on_command(keeping(50.0, 100.0)).as_slice(),
+        [MavMessage::SET_POSITION_TARGET_GLOBAL_INT(_)]
+    ));
+    // An operator's takeover forgets it: back in GUIDED, it is sent again.
+    v.on_heartbeat(&heartbeat(4, true));
+    assert!(v.on_command(keeping(50.0, 100.0)).is_empty());
+    v.on_heartbeat(&heartbeat(GUIDED, true));
+    assert!(matches!(
+        v.on_command(keeping(50.0, 100.0)).as_slice(),
+        [MavMessage::SET_POSITION_TARGET_GLOBAL_INT(_)]
+    ));
 }

@@ -87,6 +87,28 @@ pub struct Args {
         requires = "mavlink"
     )]
     mavlink_sysid: u8,
+    /// With --mavlink: within this of its goal [m] a boat whose goal has
+    /// settled is handed the goal to hold by itself: one position target,
+    /// which ArduPilot reaches and keeps by loitering, still (set
+    /// LOIT_RADIUS to how close; docs/ardupilot.md, "Quiet arrival").
+    /// 0: the coordinator steers it to the end. At most 20.
+    #[arg(
+        long,
+        value_name = "M",
+        default_value_t = 3.0,
+        requires = "mavlink",
+        value_parser = parse_station_radius
+    )]
+    station_radius: f64,
+}
+
+fn parse_station_radius(s: &str) -> Result<f64, String> {
+    let r: f64 = s.trim().parse().map_err(|e| format!("{e}"))?;
+    if (0.0..=20.0).contains(&r) {
+        Ok(r)
+    } else {
+        Err("expected a number of metres in [0, 20]".into())
+    }
 }
 
 pub async fn run(args: Args) -> anyhow::Result<()> {
@@ -175,6 +197,7 @@ async fn bridge(args: Args) -> anyhow::Result<()> {
         server: args.server.unwrap_or_default(),
         endpoints: args.mavlink,
         arm: args.arm,
+        station_radius: (args.station_radius > 0.0).then_some(args.station_radius),
         token: args.token,
         id: args.id,
         sysid: args.mavlink_sysid,

@@ -245,6 +245,10 @@ pub struct Guidance {
     pub ahead_only: bool,
     /// What the vessel declared it can follow.
     pub agility: Agility,
+    /// The vessel holds a position by itself within this of its goal
+    /// [m]: station keeping starts within the larger of this and
+    /// `hold_radius` (never when `hold_radius` is 0).
+    pub station_radius: Option<f64>,
     /// Where the `course` mode is in keeping station.
     station: Phase,
 }
@@ -273,8 +277,16 @@ impl Guidance {
             astern: false,
             ahead_only: false,
             agility: Agility::UNDECLARED,
+            station_radius: None,
             station: Phase::Free,
         }
+    }
+
+    /// Whether the vessel is keeping station on arrival now (braking or
+    /// keeping, [`station`](super::station)): a vessel that holds a
+    /// position by itself may hold its goal instead.
+    pub fn keeping_station(&self) -> bool {
+        matches!(self.station, Phase::Braking | Phase::Keeping { .. })
     }
 
     /// The command at time `t` for a vessel in `state` whose cell's centroid
@@ -513,8 +525,12 @@ impl Guidance {
                 let desired = self.desired_velocity(state, centroid, e);
                 let wd = w_d.unwrap_or(desired);
                 let yielding = (wd.0 - desired.0).hypot(wd.1 - desired.1) > YIELD;
+                let hold_radius = match self.station_radius {
+                    Some(r) if g.hold_radius > 0.0 => r.max(g.hold_radius),
+                    _ => g.hold_radius,
+                };
                 let order = self.station.advance(&Look {
-                    hold_radius: g.hold_radius,
+                    hold_radius,
                     state,
                     goal: centroid,
                     e,
@@ -522,6 +538,7 @@ impl Guidance {
                     t,
                     yielding,
                     ahead_only: self.ahead_only,
+                    holds_itself: self.station_radius.is_some(),
                 });
                 match order {
                     Order::Steer(authority) => self.course(state, wd, authority),

@@ -229,3 +229,38 @@ fn a_vessel_that_cannot_go_astern_turns_round_instead() {
     let c = settle(&mut g, 2.0, 10, &moving, (-10.0, 1.0));
     assert!(c.u_d >= 0.0 && c.r_d > 0.0, "{c:?}");
 }
+
+/// A vessel that holds a position by itself keeps station from its own,
+/// wider radius; never where the mission turned station keeping off.
+#[test]
+fn a_declared_station_radius_widens_where_keeping_starts() {
+    let at_rest = State {
+        x: 0.0,
+        y: 0.0,
+        psi: 0.0,
+        vel: Vec3::zeros(),
+    };
+    let goal = (2.0, 0.0);
+    let keeps = |hold_radius: f64, station_radius: Option<f64>| {
+        let mut g = Guidance::new(GuidanceGains {
+            hold_radius,
+            ..GuidanceGains::default()
+        });
+        g.station_radius = station_radius;
+        settle(&mut g, 0.0, 30, &at_rest, goal);
+        g.keeping_station()
+    };
+    assert!(!keeps(0.2, None));
+    assert!(keeps(0.2, Some(3.0)));
+    assert!(!keeps(0.2, Some(1.5)));
+    assert!(!keeps(0.0, Some(3.0)));
+    // And it ends beyond twice the radius (the vessel pushed off).
+    let mut g = Guidance::new(GuidanceGains::default());
+    g.station_radius = Some(3.0);
+    settle(&mut g, 0.0, 30, &at_rest, goal);
+    let off = |x: f64| State { x, ..at_rest };
+    settle(&mut g, 3.0, 30, &off(-3.5), goal);
+    assert!(g.keeping_station());
+    settle(&mut g, 6.0, 30, &off(-4.5), goal);
+    assert!(!g.keeping_station());
+}
