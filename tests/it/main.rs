@@ -12,6 +12,7 @@ mod common;
 mod api_docs;
 mod architecture;
 mod ardupilot_peer;
+mod ardupilot_quiet;
 mod ardupilot_sitl;
 mod cli;
 mod curved;

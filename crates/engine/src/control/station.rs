@@ -58,8 +58,8 @@
 //!
 //! A vessel that holds a position by itself (an ArduPilot boat's loiter,
 //! [`Look::holds_itself`]) is handed its goal instead of the keeper's
-//! commands, and handed it again when the goal moves: for it keeping
-//! starts below [`SETTLED_HELD`] and only distance ends it.
+//! commands, and handed it again when the goal has moved far: for it
+//! keeping starts below [`SETTLED_HELD`] and only distance ends it.
 //!
 //! Invariant: the keeper's commands are bounded by [`AIM_RATE`] and
 //! [`KEEP_SPEED`] and go through the same command line (continuity, rate
@@ -136,8 +136,10 @@ pub struct Look<'a> {
     /// The hull cannot go astern.
     pub ahead_only: bool,
     /// The vessel holds a position by itself, handed its goal: keeping
-    /// starts below [`SETTLED_HELD`] and a moving goal does not end it
-    /// (the vessel is handed the goal again as it moves).
+    /// starts below [`SETTLED_HELD`], and a moving goal does not end it
+    /// (handed again once it has moved farther than the radius; measured
+    /// on SITL, ending it when goals moved faster than 0.3 m/s set boats
+    /// circling again as their neighbours settled).
     pub holds_itself: bool,
 }
 
@@ -193,17 +195,22 @@ impl Phase {
         let speed = wx.hypot(wy);
         let (ex, ey) = (goal.0 - state.x, goal.1 - state.y);
         let keeps = matches!(self, Phase::Braking | Phase::Keeping { .. });
+        let (settled, unsettled) = if holds_itself {
+            (SETTLED_HELD, f64::INFINITY)
+        } else {
+            (SETTLED, UNSETTLED)
+        };
         if yielding || hold_radius <= 0.0 {
             // Keeping clear is never faded in.
             *self = Phase::Free;
-        } else if keeps && (e > 2.0 * hold_radius || (!holds_itself && goal_speed > UNSETTLED)) {
+        } else if keeps && (e > 2.0 * hold_radius || goal_speed > unsettled) {
             *self = Phase::Returning { since: t };
         }
         loop {
             match *self {
                 Phase::Free | Phase::Returning { .. }
                     if e < hold_radius
-                        && goal_speed < if holds_itself { SETTLED_HELD } else { SETTLED }
+                        && goal_speed < settled
                         && !yielding
                         && hold_radius > 0.0 =>
                 {

@@ -89,13 +89,14 @@ pub struct Args {
     mavlink_sysid: u8,
     /// With --mavlink: within this of its goal [m] a boat whose goal has
     /// settled is handed the goal to hold by itself: one position target,
-    /// which ArduPilot reaches and keeps by loitering, still (set
-    /// LOIT_RADIUS to how close; docs/ardupilot.md, "Quiet arrival").
-    /// 0: the coordinator steers it to the end. At most 20.
+    /// which ArduPilot reaches and keeps by loitering (set LOIT_RADIUS to
+    /// how close; docs/ardupilot.md, "Quiet arrival"). 0 (the default,
+    /// while it leaves some SITL boats circling): the coordinator steers
+    /// it to the end. At most 20.
     #[arg(
         long,
         value_name = "M",
-        default_value_t = 3.0,
+        default_value_t = 0.0,
         requires = "mavlink",
         value_parser = parse_station_radius
     )]
