@@ -10,7 +10,7 @@
 //! own telemetry) is printed, not bounded: most runs leave every boat
 //! still, some one boat of four circling its point (the doc's table).
 
-use std::process::{Child, Command, Stdio};
+use std::process::{Command, Stdio};
 use std::time::Duration;
 
 use seacover::protocol::VesselStatusDocument;
@@ -18,16 +18,8 @@ use seacover::protocol::VesselStatusDocument;
 use crate::common::sitl::{
     Boat, Bridge, SPEEDUP, Station, boat, coverage_now, mission, place, quiet_arrival, wait_for,
 };
+use crate::common::process::KillOnDrop;
 use crate::common::sitl::{SITL, ardupilot};
-
-struct Killed(Child);
-
-impl Drop for Killed {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn boats_handed_their_goals_keep_station_on_their_own_loiter() {
@@ -46,7 +38,7 @@ async fn boats_handed_their_goals_keep_station_on_their_own_loiter() {
         .stdout(Stdio::piped())
         .stderr(Stdio::null());
     let (child, addr) = crate::common::server::start(command);
-    let _coordinator = Killed(child);
+    let _coordinator = KillOnDrop(child);
     let base = format!("http://{addr}");
     let http = reqwest::Client::new();
     let vessels = async || -> Vec<VesselStatusDocument> {

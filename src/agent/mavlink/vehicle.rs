@@ -21,7 +21,7 @@
 //!   stop (speed and turn rate zero) and, once below [`SETTLED`], to hold
 //!   where it stopped (a position target there, repeated each second):
 //!   never an old velocity;
-//! - with `--station-radius R` (on by default), a command that says
+//! - with `--station-radius R` (opt-in), a command that says
 //!   `station` becomes one position target at that point, sent again only
 //!   when the point moves more than R from it: ArduPilot reaches it and
 //!   loiters there, still (docs/ardupilot.md, "Quiet arrival");

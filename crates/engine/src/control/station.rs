@@ -104,7 +104,8 @@ const HOLD_RATE: f64 = 0.02;
 /// A goal moving slower than this [m/s] has settled: keeping may start.
 pub const SETTLED: f64 = 0.01;
 /// The same for a vessel that holds a position by itself (an autopilot's
-/// loiter, handed its goal again whenever it has moved a metre): its
+/// loiter, handed its goal again once it has moved farther than the
+/// vessel's station radius): its
 /// neighbours' boats, which turn only under way, circle their goals
 /// until they hold too, and move the goals by centimetres a second
 /// meanwhile (measured on SITL: 0.05–0.2 m/s), so the threshold that

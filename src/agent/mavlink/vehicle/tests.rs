@@ -340,10 +340,9 @@ fn the_fix_follows_gps_raw_int_and_the_ekf() {
 
 /// Quiet arrival: a command that says `station` becomes one position
 /// target there, not repeated while the point stays within the station
-/// radius nor
-/// while the command stays fresh; a point moved past the gate is sent
-/// again; a command without `station` is a velocity again. A bridge that
-/// did not declare it follows the velocity as always.
+/// radius nor while the command stays fresh; a point moved past it is
+/// sent again; a command without `station` is a velocity again. A bridge
+/// that did not declare a radius follows the velocity as always.
 #[test]
 fn a_station_point_is_sent_once_and_again_only_when_it_moves() {
     const GATE: f64 = 3.0;
