@@ -15,10 +15,10 @@ use std::time::Duration;
 
 use seacover::protocol::VesselStatusDocument;
 
+use crate::common::process::KillOnDrop;
 use crate::common::sitl::{
     Boat, Bridge, SPEEDUP, Station, boat, coverage_now, mission, place, quiet_arrival, wait_for,
 };
-use crate::common::process::KillOnDrop;
 use crate::common::sitl::{SITL, ardupilot};
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
