@@ -10,14 +10,10 @@
 //! own telemetry) is printed, not bounded: most runs leave every boat
 //! still, some one boat of four circling its point (the doc's table).
 
-use std::process::{Command, Stdio};
 use std::time::Duration;
 
-use seacover::protocol::VesselStatusDocument;
-
-use crate::common::process::KillOnDrop;
 use crate::common::sitl::{
-    Boat, Bridge, SPEEDUP, Station, boat, coverage_now, mission, place, quiet_arrival, wait_for,
+    Boat, Bridge, Coordinator, Station, boat, coverage_now, mission, place, quiet_arrival, wait_for,
 };
 use crate::common::sitl::{SITL, ardupilot};
 
@@ -27,26 +23,10 @@ async fn boats_handed_their_goals_keep_station_on_their_own_loiter() {
     let _one = SITL.lock().await;
     let dir = tempfile::tempdir().unwrap();
     let config = mission(dir.path());
-    let mut command = Command::new(env!("CARGO_BIN_EXE_seacover"));
-    command
-        .args(["serve", "--bind", "127.0.0.1:0"])
-        .args(["--time-warp", &SPEEDUP.to_string()])
-        .arg("--data-dir")
-        .arg(dir.path().join("data"))
-        .arg("--config")
-        .arg(&config)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null());
-    let (child, addr) = crate::common::server::start(command);
-    let _coordinator = KillOnDrop(child);
-    let base = format!("http://{addr}");
+    let coordinator = Coordinator::start(&dir.path().join("data"), &config, "127.0.0.1:0");
+    let base = format!("http://{}", coordinator.addr);
     let http = reqwest::Client::new();
-    let vessels = async || -> Vec<VesselStatusDocument> {
-        match http.get(format!("{base}/api/v1/vessels")).send().await {
-            Ok(r) => r.json().await.unwrap_or_default(),
-            Err(_) => Vec::new(),
-        }
-    };
+    let vessels = async || coordinator.vessels(&http).await;
 
     // The starts of `ardupilot_sitl`'s four boats.
     let boats: Vec<Boat> = (0..4u8)

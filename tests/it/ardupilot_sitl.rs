@@ -19,8 +19,8 @@
 //! loaded machine took 284 s of the boats' time to converge instead of the
 //! usual 65-68 s, and at 5 one run under two busy loops took 203 s.
 
-use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
+use std::path::Path;
+use std::process::Command;
 use std::time::{Duration, Instant};
 
 use mavlink::MavHeader;
@@ -31,57 +31,10 @@ use seacover::protocol::VesselStatusDocument;
 use serde_json::json;
 
 use crate::common::sitl::{
-    Boat, Bridge, ORIGIN, SPEEDUP, Seen, Station, all_stopped, boat, coverage_now, east_north,
+    Boat, Bridge, Coordinator, ORIGIN, Seen, Station, all_stopped, boat, coverage_now, east_north,
     mission, place, quiet_over, under_way, wait_for,
 };
 pub(crate) use crate::common::sitl::{SITL, ardupilot};
-
-/// The coordinator as a process.
-struct Coordinator {
-    child: Child,
-    addr: String,
-    data: PathBuf,
-    config: PathBuf,
-}
-
-impl Coordinator {
-    fn start(data: &Path, config: &Path, bind: &str) -> Coordinator {
-        let mut command = Command::new(env!("CARGO_BIN_EXE_seacover"));
-        command
-            .args(["serve", "--bind", bind, "--time-warp", &SPEEDUP.to_string()])
-            .arg("--data-dir")
-            .arg(data)
-            .arg("--config")
-            .arg(config)
-            .stdout(Stdio::piped())
-            .stderr(Stdio::null());
-        let (child, addr) = crate::common::server::start(command);
-        Coordinator {
-            child,
-            addr,
-            data: data.to_path_buf(),
-            config: config.to_path_buf(),
-        }
-    }
-
-    fn url(&self, path: &str) -> String {
-        format!("http://{}{path}", self.addr)
-    }
-
-    async fn vessels(&self, http: &reqwest::Client) -> Vec<VesselStatusDocument> {
-        match http.get(self.url("/api/v1/vessels")).send().await {
-            Ok(r) => r.json().await.unwrap_or_default(),
-            Err(_) => Vec::new(),
-        }
-    }
-}
-
-impl Drop for Coordinator {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
 
 fn vessel<'a>(vessels: &'a [VesselStatusDocument], id: &str) -> Option<&'a VesselStatusDocument> {
     vessels.iter().find(|v| v.id == id)

@@ -575,3 +575,54 @@ pub async fn coverage_now(
         .unwrap();
     (now.h, ideal["H"].as_f64().unwrap())
 }
+
+/// `seacover serve` as a process, at the boats' time warp, on a data
+/// directory and a mission file.
+pub struct Coordinator {
+    pub child: Child,
+    pub addr: String,
+    pub data: PathBuf,
+    pub config: PathBuf,
+}
+
+impl Coordinator {
+    pub fn start(data: &Path, config: &Path, bind: &str) -> Coordinator {
+        let mut command = Command::new(env!("CARGO_BIN_EXE_seacover"));
+        command
+            .args(["serve", "--bind", bind, "--time-warp", &SPEEDUP.to_string()])
+            .arg("--data-dir")
+            .arg(data)
+            .arg("--config")
+            .arg(config)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null());
+        let (child, addr) = crate::common::server::start(command);
+        Coordinator {
+            child,
+            addr,
+            data: data.to_path_buf(),
+            config: config.to_path_buf(),
+        }
+    }
+
+    pub fn url(&self, path: &str) -> String {
+        format!("http://{}{path}", self.addr)
+    }
+
+    pub async fn vessels(
+        &self,
+        http: &reqwest::Client,
+    ) -> Vec<seacover::protocol::VesselStatusDocument> {
+        match http.get(self.url("/api/v1/vessels")).send().await {
+            Ok(r) => r.json().await.unwrap_or_default(),
+            Err(_) => Vec::new(),
+        }
+    }
+}
+
+impl Drop for Coordinator {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
