@@ -146,6 +146,12 @@ fn b_coordinator_lost_and_restarted() {
     let (h_lost, e_lost) = coverage(&fleet.positions());
     let e_lost_max = max_of(&e_lost);
     let before = fleet.positions();
+    // Which optimum the fleet is heading for: Lloyd's iteration from here.
+    let (h_lost_opt, _, _) = lloyd(&before);
+    let at_lost: Vec<String> = before
+        .iter()
+        .map(|p| format!("{} ({:.1}, {:.1})", p.id, p.x, p.y))
+        .collect();
 
     // Restarted on its data directory: the live fleet within seconds.
     let restarted = now();
@@ -228,7 +234,8 @@ fn b_coordinator_lost_and_restarted() {
     eprintln!(
         "SUMMARY {test}: time warp {WARP}, UDP links; mission from the coordinator (revisions \
          {rev_first:?}); coordinator SIGKILLed at {killed_at:.1} s of mission time; at 200 s: \
-         H {h_lost:.1} / centralized {h_central:.1} = {:.5}, E_max {e_lost_max:.3} m; restarted: \
+         H {h_lost:.1} / centralized {h_central:.1} = {:.5}, E_max {e_lost_max:.3} m, Lloyd's optimum from there {h_lost_opt:.1}, at \
+         {at_lost:?}; restarted: \
          8 vessels listed after {listed:.2} s; risk object POSTed: every vessel beaconing the new \
          revision after at most {slowest:.3} s ({reached:.3?}); mission now has {objects} \
          object(s); {:.0} s later: H {h_new:.1}, Lloyd's optimum from there {h_opt:.1} ({iterations} \

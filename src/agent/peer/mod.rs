@@ -27,6 +27,7 @@ pub mod board;
 pub mod credentials;
 mod error;
 mod index;
+mod joining;
 pub mod node;
 pub mod session;
 pub mod split;

@@ -20,6 +20,7 @@ use zenoh::qos::CongestionControl;
 use zenoh::query::ConsolidationMode;
 
 use super::board::{Board, Revision};
+use super::joining::Joining;
 use super::split::{Change, Split, Tick};
 use super::table::Table;
 use super::wire::{self, Keys};
@@ -394,6 +395,9 @@ struct Declared {
     /// Since when (mission time) it has heard no other vessel and holds,
     /// while it does.
     alone: Option<f64>,
+    /// While it (re)joins the fleet: it holds until its neighbourhood is
+    /// heard whole (see [`Joining`]).
+    joining: Option<Joining>,
 }
 
 impl Declared {
@@ -439,7 +443,51 @@ impl Declared {
             ahead_only: false,
             split: Split::default(),
             alone: None,
+            joining: Some(Joining::START),
         })
+    }
+
+    /// The hold of a vessel that hears no other vessel, or is still
+    /// joining the fleet it has begun to hear (see [`Joining`]); `None`
+    /// once it covers.
+    fn hold_while_joining(
+        &mut self,
+        shared: &Shared,
+        own: &crate::control::model::State,
+        t: f64,
+    ) -> Option<crate::protocol::CommandDocument> {
+        let ageing = &shared.config.ageing;
+        let heard =
+            shared
+                .table
+                .lock()
+                .expect("table lock")
+                .others_heard(&self.id, Instant::now(), ageing);
+        if heard == 0 {
+            if self.alone.is_none() {
+                tracing::warn!(vessel = %self.id, fleet = %shared.keys.fleet, "hears no other vessel of the fleet (none there, or its credentials refused): holding station; --alone covers alone");
+                self.alone = Some(t);
+            }
+            self.joining = None;
+            self.set_partition(0);
+            return Some(hold(self.ticks, own, "hears no other vessel of the fleet"));
+        }
+        if let Some(since) = self.alone.take() {
+            tracing::info!(vessel = %self.id, held = t - since, heard, "hears the fleet: joining");
+            self.joining = Some(Joining {
+                began: t,
+                newest: t,
+                heard,
+            });
+        }
+        let joining = self.joining.as_mut()?;
+        if !joining.settled(heard, t, ageing.stale_after) {
+            self.set_partition(0);
+            return Some(hold(self.ticks, own, "joining the fleet"));
+        }
+        tracing::info!(vessel = %self.id, joined_in = t - joining.began, heard, "heard the fleet whole: covering");
+        self.joining = None;
+        None
     }
 
     fn take_mission(&mut self) {
@@ -502,33 +550,19 @@ impl Declared {
         t: f64,
     ) -> Option<crate::protocol::CommandDocument> {
         let actuator = self.actuator();
-        let (Some(rev), Some(g)) = (&self.current, self.guidance.as_mut()) else {
+        if self.current.is_none() || self.guidance.is_none() {
             self.controlled = false;
+            return None;
+        }
+        if !shared.config.alone
+            && let Some(held) = self.hold_while_joining(shared, own, t)
+        {
+            return Some(held);
+        }
+        let (Some(rev), Some(g)) = (&self.current, self.guidance.as_mut()) else {
             return None;
         };
         let ageing = &shared.config.ageing;
-        if !shared.config.alone {
-            let heard = shared.table.lock().expect("table lock").hears_another(
-                &self.id,
-                Instant::now(),
-                ageing,
-            );
-            match (heard, self.alone) {
-                (false, None) => {
-                    tracing::warn!(vessel = %self.id, fleet = %shared.keys.fleet, "hears no other vessel of the fleet (none there, or its credentials refused): holding station; --alone covers alone");
-                    self.alone = Some(t);
-                }
-                (true, Some(since)) => {
-                    tracing::info!(vessel = %self.id, held = t - since, "hears the fleet again: covering");
-                    self.alone = None;
-                }
-                _ => {}
-            }
-            if self.alone.is_some() {
-                self.set_partition(0);
-                return Some(hold(self.ticks, own));
-            }
-        }
         let neighbours = shared.table.lock().expect("table lock").neighbours_near(
             &self.id,
             (own.x, own.y),
@@ -697,8 +731,12 @@ fn status_document(
     }
 }
 
-/// The command to keep station where the vessel is (it hears no other).
-fn hold(tick: u64, own: &crate::control::model::State) -> crate::protocol::CommandDocument {
+/// The command to keep station where the vessel is, and why.
+fn hold(
+    tick: u64,
+    own: &crate::control::model::State,
+    why: &str,
+) -> crate::protocol::CommandDocument {
     crate::protocol::CommandDocument {
         tick,
         u_d: 0.0,
@@ -708,7 +746,7 @@ fn hold(tick: u64, own: &crate::control::model::State) -> crate::protocol::Comma
         centroid: [own.x, own.y],
         e: 0.0,
         psi_e: 0.0,
-        hold: Some("hears no other vessel of the fleet".into()),
+        hold: Some(why.into()),
         station: None,
     }
 }

@@ -577,16 +577,33 @@ impl Fleet {
             .iter()
             .filter_map(|v| {
                 let text = std::fs::read_to_string(&v.log).unwrap_or_default();
-                // The peer node's INFO lines (joins, split plans) are kept
-                // for SEACOVER_PEER_KEEP; the digest is of the rest.
-                let lines: Vec<&str> = text.lines().filter(|l| !l.contains(" INFO ")).collect();
-                (!lines.is_empty())
-                    .then(|| format!("{}: {} log lines, first: {}", v.id, lines.len(), lines[0]))
+                // The digest is of warnings and errors, with the INFO lines
+                // that end one (a hold, joining, a split plan), so that a
+                // failed run says how long each lasted; the rest of the
+                // INFO lines (joins, plans) are kept for SEACOVER_PEER_KEEP.
+                let ends = ["heard the fleet whole", "plan ended"];
+                let lines: Vec<&str> = text
+                    .lines()
+                    .filter(|l| !l.contains(" INFO ") || ends.iter().any(|e| l.contains(e)))
+                    .collect();
+                let shown = lines
+                    .iter()
+                    .take(8)
+                    .copied()
+                    .collect::<Vec<_>>()
+                    .join("\n    ");
+                (!lines.is_empty()).then(|| {
+                    format!(
+                        "{}: {} log lines, the first:\n    {shown}",
+                        v.id,
+                        lines.len()
+                    )
+                })
             })
             .collect();
         if !digest.is_empty() {
             eprintln!(
-                "{}: vessel logs (warnings and errors):\n  {}",
+                "{}: vessel logs (warnings, errors and what ended them):\n  {}",
                 self.name,
                 digest.join("\n  ")
             );

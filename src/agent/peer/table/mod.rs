@@ -429,13 +429,18 @@ impl Table {
         out
     }
 
-    /// Whether any vessel but `me` has a fresh beacon (within
+    /// How many vessels but `me` have a fresh beacon (within
     /// `stale_after`) that is believed: one that hears none is alone.
-    pub fn hears_another(&self, me: &str, now: Instant, ageing: &Ageing) -> bool {
-        self.ids.iter().any(|(id, &slot)| {
-            let h = self.slot(slot);
-            id != me && age(h, now, ageing) <= ageing.stale_after && h.judge.quarantined().is_none()
-        })
+    pub fn others_heard(&self, me: &str, now: Instant, ageing: &Ageing) -> usize {
+        self.ids
+            .iter()
+            .filter(|&(id, &slot)| {
+                let h = self.slot(slot);
+                id != me
+                    && age(h, now, ageing) <= ageing.stale_after
+                    && h.judge.quarantined().is_none()
+            })
+            .count()
     }
 
     /// Every vessel heard (own ones included) and its beacon's age [s of

@@ -318,7 +318,10 @@ fn an_implausible_neighbour_is_traffic_until_its_beacons_agree() {
     );
     assert_eq!(table.refused()["jump"], 1);
     assert_eq!(table.quarantined().len(), 1);
-    assert!(!table.hears_another("me", t0 + Duration::from_secs_f64(0.4), &ageing));
+    assert_eq!(
+        table.others_heard("me", t0 + Duration::from_secs_f64(0.4), &ageing),
+        0
+    );
     // Consistent again: 1 m/s for 2 s at 5 Hz.
     let mut last = None;
     for i in 1..=11 {
