@@ -77,9 +77,12 @@
 //! hulls at rest, bows towards each other, asked to pass sideways, would
 //! surge straight at each other. So the filter also returns, per vessel, the
 //! interval of surge speeds u for which u·bow + sway meets every one of its
-//! constraints ([`Safe::surge`]), and the caller clamps the surge command
-//! into it: an underactuated hull is only ever asked for the part of the
-//! safe motion its thrust can give now. The interval always holds 0 when the
+//! constraints ([`Safe::surge`]), and the caller holds the surge command
+//! to it: an underactuated hull is only ever asked for the part of the
+//! safe motion its thrust can give now. (The interval is not continuous
+//! in the bow: it flips where the bow crosses the normal of a constraint
+//! the sway alone does not meet, so the guidance approaches it at the
+//! hull's own rate.) The interval always holds 0 when the
 //! sway meets the constraints; when it does not, the constraints are
 //! relaxed as above.
 //!

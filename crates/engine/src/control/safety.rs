@@ -20,9 +20,10 @@
 //!    closing no faster than the hull can still stop.
 //! 5. **Tracking**: the `course` guidance turns that ground velocity into
 //!    (u_d, r_d) for the underactuated hull ([`Guidance::track`]); with the
-//!    filter on, u_d is clamped into the surges that keep every gap along
-//!    the bow with the present sway (the hull's thrust is along its bow
-//!    while it turns; see [`barrier`](super::barrier)).
+//!    filter on, u_d is held to the surges that keep every gap along the
+//!    bow with the present sway (the hull's thrust is along its bow while
+//!    it turns; see [`barrier`](super::barrier)), reaching them at the rate
+//!    the vessel declared it can follow.
 //!
 //! With `reachable_goals` off, steps 1–2 are skipped and each vessel steers
 //! straight at its centroid: with the filter off too, that is exactly the

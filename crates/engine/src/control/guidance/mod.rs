@@ -57,9 +57,13 @@
 //!   authority than the mission's bounds is asked only for what it can do;
 //!   its surge bound is taken around v r, the rate its surge changes at
 //!   unforced, where the mission's is absolute);
-//! - never leaves ±`max_yaw_rate` nor the safety filter's surge interval:
-//!   that bound is a constraint, and where it moves past the line the line
-//!   jumps to it (the filter's intervention, the one step left).
+//! - never leaves ±`max_yaw_rate`, and keeps inside the safety filter's
+//!   surge interval: that bound is a constraint, and where it moves past
+//!   the line (it jumps when the bow swings across a constraint's normal)
+//!   the line heads for it at the rate the vessel declared it can follow,
+//!   and jumps to it for a vessel that declared none. A step would reach
+//!   the hull no sooner: its governor takes it at that rate
+//!   ([`reference`](super::reference)).
 //!
 //! The cost is one tick of delay on the raw law, which the coverage figures
 //! do not notice (`docs/reproducing-the-paper.md`).
@@ -332,8 +336,9 @@ impl Guidance {
     /// With `towards` the centroid, `remaining` its distance and `w_d` from
     /// [`desired_velocity`](Self::desired_velocity), this is exactly
     /// [`update`](Self::update). `surge` bounds u_d (the safety filter's
-    /// barrier; [`UNBOUNDED`] for none): the command line never leaves it,
-    /// even where that costs a step. The `paper` mode ignores `w_d` and
+    /// barrier; [`UNBOUNDED`] for none): where it moves past the command
+    /// line, the line heads for it at the vessel's declared agility (at
+    /// once, a step, for a vessel that declared none). The `paper` mode ignores `w_d` and
     /// `surge`: the literal law steers the bow, not a ground velocity.
     pub fn track(
         &mut self,
@@ -394,17 +399,28 @@ impl Guidance {
             }
             _ => (state.vel.x, state.vel.z, FIRST_PERIOD),
         };
-        // The bound is a safety constraint: it wins over continuity.
-        let u = u0.max(lo).min(hi);
+        // The bound is a safety constraint: where it moves past the line,
+        // the line heads for it, from where it is, as fast as the vessel
+        // declared it can follow (a vessel that declared nothing is put
+        // inside at once). A step would be no faster at the hull, whose
+        // governor takes it at that same rate, and the bound does jump:
+        // where a bow swings across a constraint's normal.
+        let inside = u0.max(lo).min(hi);
+        let u = if self.agility.surge_accel.is_finite() {
+            u0
+        } else {
+            inside
+        };
         let r = r0.clamp(-g.max_yaw_rate, g.max_yaw_rate);
-        let cut = (bounded_u - raw_u).abs().max((u - u0).abs());
+        let cut = (bounded_u - raw_u).abs().max((inside - u0).abs());
         // Reach the law's output by the next command if the rate bounds
-        // allow (u's own rate fed forward), never leaving the bounds.
+        // allow (u's own rate fed forward), never leaving the bounds, and
+        // from outside them head there at the declared rate.
         let u_dot = (raw_u_dot + (bounded_u - u) / period)
             .clamp(-g.surge_accel, g.surge_accel)
             .clamp(agile.0, agile.1)
-            .max((lo - u) / period)
-            .min((hi - u) / period);
+            .max(((lo - u) / period).min(agile.1.max(0.0)))
+            .min(((hi - u) / period).max(agile.0.min(0.0)));
         let r_dot = ((raw_r - r) / period).clamp(-yaw_accel, yaw_accel).clamp(
             (-g.max_yaw_rate - r) / period,
             (g.max_yaw_rate - r) / period,

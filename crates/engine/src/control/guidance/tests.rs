@@ -192,6 +192,69 @@ fn a_declared_surge_agility_bounds_the_rate_around_the_hulls_own() {
     }
 }
 
+/// The safety filter's surge bound jumps where a bow swings across the
+/// normal of a constraint its sway alone does not meet (the networked demo:
+/// usv-8's bound went from u ≥ 0.46 to u ≤ −0.41 in one tick). A vessel
+/// that declared its agility has its line go there along its slope at that
+/// rate, no step: its governor would take the step no faster. One that
+/// declared nothing is put inside at once.
+#[test]
+fn a_bound_that_jumps_is_approached_at_the_declared_agility() {
+    let agility = Agility {
+        yaw_accel: 0.75,
+        surge_accel: 0.75,
+    };
+    // Going ahead at 0.4 m/s, bow east, goal ahead: the law wants more.
+    let s = State {
+        x: 0.0,
+        y: 0.0,
+        psi: 0.0,
+        vel: Vec3::new(0.4, 0.0, 0.0),
+    };
+    let goal = (30.0, 0.0);
+    let w = Guidance::new(GuidanceGains::default()).desired_velocity(&s, goal, 30.0);
+    let mut g = Guidance::new(GuidanceGains::default());
+    g.agility = agility;
+    let mut free = Guidance::new(GuidanceGains::default());
+    let (jump, after) = ((0.3, 2.0), (-2.0, -0.4));
+    let mut last: Option<(f64, Command)> = None;
+    let mut inside_by = None;
+    for k in 0..40 {
+        let t = 0.1 * k as f64;
+        let bound = if k < 10 { jump } else { after };
+        let c = g.track(t, &s, goal, 30.0, w, bound);
+        let f = free.track(t, &s, goal, 30.0, w, bound);
+        assert!((bound.0..=bound.1).contains(&f.u_d), "{f:?}");
+        if let Some((t0, p)) = last {
+            // Continuous (where the previous line got to), at no more
+            // than the declared rate (v r = 0).
+            let since = t - t0;
+            let expected = p.u_d + p.u_d_dot * since;
+            assert!((c.u_d - expected).abs() < 1e-12, "{c:?} {p:?}");
+            assert!(p.u_d_dot.abs() <= agility.surge_accel + 1e-12, "{p:?}");
+            if k == 10 {
+                // From where the line was to the bound at the declared rate.
+                let needed = (expected - after.1) / agility.surge_accel;
+                inside_by = Some(t + needed);
+            }
+        }
+        if k >= 10 {
+            // The law wants more than the bound: the command is cut.
+            assert!(c.surge_cut > 0.0, "{k}: {c:?}");
+            if c.u_d > after.1 {
+                // Outside, it heads down as fast as declared, and not for
+                // longer than that takes.
+                let reaches = (c.u_d + c.u_d_dot * 0.1 - after.1).abs() < 1e-12;
+                assert!(c.u_d_dot == -agility.surge_accel || reaches, "{c:?}");
+                assert!(t < inside_by.unwrap(), "{k}: {c:?}");
+            }
+        }
+        last = Some((t, c));
+    }
+    let (_, end) = last.unwrap();
+    assert!((end.u_d - after.1).abs() < 1e-12, "{end:?}");
+}
+
 #[test]
 fn a_vessel_that_cannot_go_astern_turns_round_instead() {
     let mut g = Guidance::new(GuidanceGains::default());
