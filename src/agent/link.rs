@@ -31,6 +31,11 @@ use crate::protocol::{
 /// What the link hands the vessel.
 #[derive(Debug, Clone)]
 pub enum Inbound {
+    /// The coordinator welcomed the vessel (on every connection): its tick
+    /// rate [Hz of mission time]. Tick N of a coordinator is at mission
+    /// time N / tick_hz, so a vessel can place each command's line where
+    /// the coordinator computed it, whatever the link's delay did to it.
+    Welcome { tick_hz: f64 },
     /// A command from the coordinator.
     Command(CommandDocument),
     /// The connection to the coordinator closed or failed: no command will
@@ -134,6 +139,15 @@ fn http_message(body: Option<&[u8]>) -> String {
         .unwrap_or_else(|_| String::from_utf8_lossy(body).trim().to_string())
 }
 
+/// A link the coordinator welcomed.
+pub struct Welcomed {
+    pub socket: Socket,
+    /// The mission's name, to say in the next hello.
+    pub mission: Option<String>,
+    /// The coordinator's tick rate [Hz of mission time].
+    pub tick_hz: f64,
+}
+
 /// Connects to `url` (with the bearer token), says `hello` and waits for the
 /// coordinator's welcome: the handshake of every vessel link, simulated,
 /// bridged or the load client's.
@@ -141,7 +155,7 @@ pub async fn handshake(
     url: &str,
     token: Option<&str>,
     hello: &VesselMessage,
-) -> Result<(Socket, Option<String>), HandshakeError> {
+) -> Result<Welcomed, HandshakeError> {
     let request = request(url, token).map_err(HandshakeError::Url)?;
     // Small frames both ways: send each at once rather than waiting for
     // the previous one's acknowledgement (no Nagle), and a small read
@@ -165,7 +179,15 @@ pub async fn handshake(
     loop {
         match socket.next().await {
             Some(Ok(Message::Text(t))) => match serde_json::from_str::<CoordinatorMessage>(&t) {
-                Ok(CoordinatorMessage::Welcome { mission, .. }) => return Ok((socket, mission)),
+                Ok(CoordinatorMessage::Welcome {
+                    mission, tick_hz, ..
+                }) => {
+                    return Ok(Welcomed {
+                        socket,
+                        mission,
+                        tick_hz,
+                    });
+                }
                 Ok(CoordinatorMessage::Error { code, message }) => {
                     return Err(HandshakeError::Refused { code, message });
                 }
@@ -241,12 +263,15 @@ pub async fn run(
             c = handshake(&config.url, config.token.as_deref(), &hello) => c,
         };
         let socket = match connected {
-            Ok((socket, named)) => {
+            Ok(welcomed) => {
                 // No name: held for following another mission; keep it.
-                if named.is_some() {
-                    following = named;
+                if welcomed.mission.is_some() {
+                    following = welcomed.mission;
                 }
-                socket
+                let _ = commands.try_send(Inbound::Welcome {
+                    tick_hz: welcomed.tick_hz,
+                });
+                welcomed.socket
             }
             Err(e) => {
                 let wait = backoff.mul_f64(rng.random_range(0.5..1.5));

@@ -220,7 +220,8 @@ async fn run_vessel(
                 poses.send_replace(Some(onboard.pose()));
             }
             Some(m) = incoming.recv() => match m {
-                link::Inbound::Command(c) => onboard.command = Some((c, onboard.t)),
+                link::Inbound::Welcome { tick_hz } => onboard.tick_period = Some(1.0 / tick_hz),
+                link::Inbound::Command(c) => onboard.receive(c),
                 // The simulated hull keeps its own rule for an aging
                 // command (docs/api.md): it needs no word of the loss.
                 link::Inbound::Lost => {}

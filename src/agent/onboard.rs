@@ -20,6 +20,19 @@ use crate::control::observer::{Observer, ObserverGains};
 use crate::control::reference::{Governor, Line, Peaks, agility};
 use crate::protocol::{CommandDocument, PoseDocument};
 
+/// How far from its arrival a command's line may start, in tick periods
+/// ([`Onboard::receive`]): a command arriving just as the previous one's
+/// line starts is a period early, and a reading off a clock that advances a
+/// pose period at a time is late by up to that.
+const LEEWAY: f64 = 1.5;
+
+/// Commands at most waiting for their lines to start ([`Onboard::receive`]).
+const PENDING: usize = 3;
+
+/// A line due within this of now [s] starts now: the clock sums 1 ms steps,
+/// so it reaches a tick's time only to within rounding.
+const DUE_SLACK: f64 = 1e-6;
+
 /// One simulated vessel's settings.
 #[derive(Debug, Clone)]
 pub struct VesselConfig {
@@ -38,8 +51,13 @@ pub(crate) struct Onboard {
     controller: ControllerGains,
     disturbance: Disturbance,
     pub(crate) t: f64,
-    /// The newest command and the on-board time it arrived.
+    /// The newest command and the on-board time its line starts at
+    /// ([`Onboard::receive`]).
     pub(crate) command: Option<(CommandDocument, f64)>,
+    /// Commands whose lines start later than now, and when, oldest first.
+    pending: std::collections::VecDeque<(CommandDocument, f64)>,
+    /// The coordinator's tick period [mission s], from its welcome.
+    pub(crate) tick_period: Option<f64>,
     governor: Governor,
     /// Largest tracking error and command lag since the previous pose.
     peaks: Peaks,
@@ -138,6 +156,8 @@ impl Onboard {
             disturbance: Disturbance::Paper { index: v.index },
             t: 0.0,
             command: None,
+            pending: std::collections::VecDeque::new(),
+            tick_period: None,
             governor: Governor::new(v.params, v.start.vel),
             peaks: Peaks::default(),
             keeper: Some(Keeper::new(&v.params)),
@@ -151,11 +171,62 @@ impl Onboard {
         self
     }
 
+    /// Takes a command from the coordinator. Its line starts at its tick:
+    /// the coordinator computes tick N's line to continue tick N − 1's
+    /// from N / tick_hz on, so the vessel starts it one tick period after
+    /// the previous one's start, not when it happens to arrive. (The
+    /// vessel's clock advances a pose period at a time, so the arrival
+    /// read off it jitters by that much: on the paper's hull turning at
+    /// 0.75 rad/s², 50 ms is a 0.04 rad/s step in the command.) Until
+    /// then the previous line goes on; a line that starts in the past is
+    /// taken where it has got to. A first command, one after a restarted
+    /// count, or one whose tick is more than [`LEEWAY`] periods off the
+    /// arrival (the link stalled, or the two clocks drifted apart) starts on
+    /// arrival.
+    pub(crate) fn receive(&mut self, command: CommandDocument) {
+        self.start_due();
+        let newest = self.pending.back().or(self.command.as_ref());
+        let at = match (newest, self.tick_period) {
+            (Some((previous, started)), Some(period)) if command.tick > previous.tick => {
+                let due = started + (command.tick - previous.tick) as f64 * period;
+                if (due - self.t).abs() <= LEEWAY * period {
+                    due
+                } else {
+                    self.t
+                }
+            }
+            _ => self.t,
+        };
+        if at > self.t {
+            // Never more than a few ahead (the link keeps one command in
+            // flight): past that the oldest starts now.
+            if self.pending.len() >= PENDING {
+                self.command = self.pending.pop_front();
+            }
+            self.pending.push_back((command, at));
+        } else {
+            self.pending.clear();
+            self.command = Some((command, at));
+        }
+    }
+
+    /// Makes the newest pending command whose line has started the one
+    /// followed. (A line that starts at the end of an advance is due
+    /// before the next command arrives: checked on arrival too.)
+    fn start_due(&mut self) {
+        while let Some((_, at)) = self.pending.front()
+            && *at <= self.t + DUE_SLACK
+        {
+            self.command = self.pending.pop_front();
+        }
+    }
+
     /// Advances `seconds` of simulated time in 1 ms steps.
     pub(crate) fn advance(&mut self, seconds: f64) {
         let h = 1e-3;
         let steps = (seconds / h).round() as usize;
         for _ in 0..steps {
+            self.start_due();
             let line = match &self.command {
                 Some((c, at)) if self.t - at <= 1.0 && c.hold.is_none() => {
                     if let Some(k) = self.keeper.as_mut() {
@@ -235,6 +306,119 @@ fn decimals(v: f64, n: i32) -> f64 {
 mod tests {
     use super::*;
     use crate::control::model::VesselParams;
+
+    /// Tick k's line of a yaw-rate ramp at 0.75 rad/s² (the paper's hull
+    /// turning as hard as it declared it can), 10 Hz.
+    fn ramp(tick: u64) -> CommandDocument {
+        CommandDocument {
+            tick,
+            u_d: 0.0,
+            r_d: 0.075 * tick as f64,
+            u_d_dot: 0.0,
+            r_d_dot: 0.75,
+            centroid: [0.0, 0.0],
+            e: 0.0,
+            psi_e: 0.0,
+            hold: None,
+            station: None,
+        }
+    }
+
+    /// The yaw rate the vessel's command line asks for now.
+    fn asked(vessel: &Onboard) -> f64 {
+        let (c, at) = vessel.command.as_ref().expect("a command");
+        c.r_d + c.r_d_dot * (vessel.t - at)
+    }
+
+    /// Advances in 1 ms steps for `seconds`, checking at every step that
+    /// the line followed is the ramp from `t0`.
+    fn follows_the_ramp(vessel: &mut Onboard, seconds: f64, t0: f64) {
+        for _ in 0..(seconds / 1e-3).round() as usize {
+            vessel.advance(1e-3);
+            let ramp = 0.75 * (vessel.t - t0);
+            assert!((asked(vessel) - ramp).abs() < 1e-9, "at {}", vessel.t);
+        }
+    }
+
+    /// The networked demo's vessels advance a pose period (50 ms) at a
+    /// time and took each command at that clock's reading: commands 0.1 s
+    /// apart read as 0.05 or 0.15 s apart, and the line they follow stepped
+    /// by 0.0375 rad/s at each (a yaw-rate command lag of 0.04–0.048 in the
+    /// tracking test, against a bound of 0.05). On the tick's timeline the
+    /// ramp is followed without a step.
+    #[test]
+    fn a_command_starts_at_its_tick_not_when_it_arrives() {
+        let mut vessel = Onboard::new(&VesselConfig {
+            id: "usv-1".into(),
+            index: 1,
+            start: State {
+                x: 50.0,
+                y: 50.0,
+                psi: 0.0,
+                vel: Vec3::zeros(),
+            },
+            params: VesselParams::PAPER,
+        });
+        vessel.tick_period = Some(0.1);
+        let t0 = vessel.t;
+        vessel.receive(ramp(0));
+        for k in 1..20 {
+            // Read at 0.05 s and 0.15 s after the previous one: early
+            // (taken at its tick, the previous line going on till then)
+            // and late (taken where it has got to).
+            follows_the_ramp(&mut vessel, if k % 2 == 1 { 0.05 } else { 0.15 }, t0);
+            vessel.receive(ramp(k));
+        }
+        follows_the_ramp(&mut vessel, 0.15, t0);
+        // A zigzag (up on even ticks, down on odd ones, so that a line
+        // followed past its tick leaves it), each command arriving just as
+        // the previous one's line starts, at the end of an advance: none is
+        // passed over.
+        let zig = |k: u64| CommandDocument {
+            r_d: if k.is_multiple_of(2) { 0.0 } else { 0.075 },
+            r_d_dot: if k.is_multiple_of(2) { 0.75 } else { -0.75 },
+            ..ramp(k)
+        };
+        let t1 = vessel.t;
+        let zigzag = |t: f64| {
+            let phase = ((t - t1) / 0.1).rem_euclid(2.0);
+            0.075 * if phase < 1.0 { phase } else { 2.0 - phase }
+        };
+        let follows = |vessel: &mut Onboard, seconds: f64| {
+            for _ in 0..(seconds / 1e-3).round() as usize {
+                vessel.advance(1e-3);
+                let want = zigzag(vessel.t);
+                assert!(
+                    (asked(vessel) - want).abs() < 1e-6,
+                    "at {}: {} against {want}, {:?}",
+                    vessel.t,
+                    asked(vessel),
+                    vessel.command.as_ref().map(|(c, at)| (c.tick, *at))
+                );
+            }
+        };
+        vessel.receive(zig(20));
+        follows(&mut vessel, 0.05);
+        vessel.receive(zig(21));
+        follows(&mut vessel, 0.05);
+        for k in 22..30 {
+            vessel.receive(zig(k));
+            follows(&mut vessel, 0.1);
+        }
+        // After a stall longer than a tick, the line starts on arrival.
+        vessel.advance(0.4);
+        vessel.receive(ramp(30));
+        assert!((asked(&vessel) - 2.25).abs() < 1e-9);
+        // So does a first command from a restarted coordinator.
+        vessel.advance(0.05);
+        vessel.receive(ramp(3));
+        assert!((asked(&vessel) - 0.225).abs() < 1e-9);
+        // And every one when the coordinator's tick rate is not known.
+        vessel.tick_period = None;
+        vessel.advance(0.05);
+        vessel.receive(ramp(4));
+        assert!((asked(&vessel) - 0.3).abs() < 1e-9);
+    }
 
     /// A vessel under way that loses its commands keeps station: with
     /// zero surge and yaw commands alone the paper's hull slid on at

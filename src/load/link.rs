@@ -119,10 +119,10 @@ pub(super) async fn run_link(
         }
     };
     let socket = match socket {
-        Ok((s, _)) => {
+        Ok(welcomed) => {
             shared.welcomed.fetch_add(1, Ordering::Relaxed);
             shared.settled.fetch_add(1, Ordering::Relaxed);
-            s
+            welcomed.socket
         }
         Err(e) => {
             shared.settled.fetch_add(1, Ordering::Relaxed);

@@ -541,6 +541,8 @@ async fn run_vehicle(
             }
             c = commands.recv() => match c {
                 Some(link::Inbound::Command(c)) => v.on_command(c),
+                // ArduPilot takes each target as it comes.
+                Some(link::Inbound::Welcome { .. }) => Vec::new(),
                 Some(link::Inbound::Lost) => {
                     tracing::warn!(%vessel, "coordinator link lost: stopping the boat");
                     v.on_link_lost()
