@@ -331,13 +331,24 @@ mod tests {
     }
 
     /// Advances in 1 ms steps for `seconds`, checking at every step that
-    /// the line followed is the ramp from `t0`.
-    fn follows_the_ramp(vessel: &mut Onboard, seconds: f64, t0: f64) {
+    /// the line followed asks for `want(t)` (to within `within`).
+    fn follows(vessel: &mut Onboard, seconds: f64, want: impl Fn(f64) -> f64, within: f64) {
         for _ in 0..(seconds / 1e-3).round() as usize {
             vessel.advance(1e-3);
-            let ramp = 0.75 * (vessel.t - t0);
-            assert!((asked(vessel) - ramp).abs() < 1e-9, "at {}", vessel.t);
+            let want = want(vessel.t);
+            assert!(
+                (asked(vessel) - want).abs() < within,
+                "at {}: {} against {want}, {:?}",
+                vessel.t,
+                asked(vessel),
+                vessel.command.as_ref().map(|(c, at)| (c.tick, *at))
+            );
         }
+    }
+
+    /// [`follows`] the ramp from `t0`.
+    fn follows_the_ramp(vessel: &mut Onboard, seconds: f64, t0: f64) {
+        follows(vessel, seconds, |t| 0.75 * (t - t0), 1e-9);
     }
 
     /// The networked demo's vessels advance a pose period (50 ms) at a
@@ -384,26 +395,13 @@ mod tests {
             let phase = ((t - t1) / 0.1).rem_euclid(2.0);
             0.075 * if phase < 1.0 { phase } else { 2.0 - phase }
         };
-        let follows = |vessel: &mut Onboard, seconds: f64| {
-            for _ in 0..(seconds / 1e-3).round() as usize {
-                vessel.advance(1e-3);
-                let want = zigzag(vessel.t);
-                assert!(
-                    (asked(vessel) - want).abs() < 1e-6,
-                    "at {}: {} against {want}, {:?}",
-                    vessel.t,
-                    asked(vessel),
-                    vessel.command.as_ref().map(|(c, at)| (c.tick, *at))
-                );
-            }
-        };
         vessel.receive(zig(20));
-        follows(&mut vessel, 0.05);
+        follows(&mut vessel, 0.05, zigzag, 1e-6);
         vessel.receive(zig(21));
-        follows(&mut vessel, 0.05);
+        follows(&mut vessel, 0.05, zigzag, 1e-6);
         for k in 22..30 {
             vessel.receive(zig(k));
-            follows(&mut vessel, 0.1);
+            follows(&mut vessel, 0.1, zigzag, 1e-6);
         }
         // After a stall longer than a tick, the line starts on arrival.
         vessel.advance(0.4);
