@@ -54,6 +54,20 @@ pub struct AgentConfig {
 pub fn paper_vessels(params: VesselParams) -> Vec<VesselConfig> {
     let doc = crate::mission::scenario::parse_document(crate::mission::PAPER_SCENARIO)
         .expect("built-in scenario");
+    starts_of(&doc, params)
+}
+
+/// The vessels of a scenario document (its ids, and its starts in its own
+/// plane); `None` for a mission document, or a scenario without vessels.
+pub fn scenario_vessels(text: &str, params: VesselParams) -> Option<Vec<VesselConfig>> {
+    let doc = crate::mission::scenario::parse_document(text).ok()?;
+    (!doc.vessels.is_empty()).then(|| starts_of(&doc, params))
+}
+
+fn starts_of(
+    doc: &crate::mission::scenario::LocalScenario,
+    params: VesselParams,
+) -> Vec<VesselConfig> {
     doc.vessels
         .iter()
         .enumerate()
@@ -104,6 +118,38 @@ pub enum FleetError {
     #[error("--id must match [A-Za-z0-9_.-]{{1,64}}")]
     Id,
 }
+
+/// The fleet a peer node runs: with a scenario document as its mission
+/// (`scenario`, its text) and no count asked, the scenario's own vessels
+/// where it starts them, or with `id` the one of that id (else its first,
+/// renamed); otherwise [`fleet`] of `n` (8 when not asked).
+pub fn peer_fleet(
+    scenario: Option<&str>,
+    n: Option<usize>,
+    id: Option<String>,
+    params: VesselParams,
+    seed: u64,
+) -> Result<Vec<VesselConfig>, FleetError> {
+    let Some(mut vessels) = scenario
+        .filter(|_| n.is_none())
+        .and_then(|text| scenario_vessels(text, params))
+    else {
+        return fleet(n.unwrap_or(DEFAULT_VESSELS), id, params, seed);
+    };
+    if let Some(id) = id {
+        if !crate::mission::scenario::valid_id(&id) {
+            return Err(FleetError::Id);
+        }
+        let at = vessels.iter().position(|v| v.id == id).unwrap_or(0);
+        vessels.swap(0, at);
+        vessels.truncate(1);
+        vessels[0].id = id;
+    }
+    Ok(vessels)
+}
+
+/// How many vessels `seacover agent` simulates unless told.
+pub const DEFAULT_VESSELS: usize = 8;
 
 /// The fleet `seacover agent` runs: `n` vessels, the first eight at the
 /// paper's starts (usv-1 … usv-8), further ones (usv-9 …) at seeded random
@@ -231,5 +277,42 @@ async fn run_vessel(
     match link.await {
         Ok(Err(e)) => Err(e),
         _ => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const HARBOUR: &str = include_str!("../../examples/harbour.json");
+
+    /// A peer node given a scenario runs its vessels where it starts them,
+    /// not the paper's eight.
+    #[test]
+    fn a_scenario_mission_brings_its_own_vessels() {
+        let p = VesselParams::PAPER;
+        let doc = crate::mission::scenario::parse_document(HARBOUR).unwrap();
+        let all = peer_fleet(Some(HARBOUR), None, None, p, 1).unwrap();
+        assert_eq!(all.len(), doc.vessels.len());
+        for (v, d) in all.iter().zip(&doc.vessels) {
+            assert_eq!(v.id, d.id);
+            assert_eq!((v.start.x, v.start.y), (d.x, d.y));
+        }
+        let one = peer_fleet(Some(HARBOUR), None, Some("usv-12".into()), p, 1).unwrap();
+        let twelfth = doc.vessels.iter().find(|v| v.id == "usv-12").unwrap();
+        assert_eq!(one.len(), 1);
+        assert_eq!((one[0].start.x, one[0].start.y), (twelfth.x, twelfth.y));
+        // A count asked for wins; a mission document has no vessels.
+        assert_eq!(
+            peer_fleet(Some(HARBOUR), Some(3), None, p, 1)
+                .unwrap()
+                .len(),
+            3
+        );
+        assert_eq!(
+            peer_fleet(Some("{}"), None, None, p, 1).unwrap().len(),
+            DEFAULT_VESSELS
+        );
+        assert_eq!(peer_fleet(None, None, None, p, 1).unwrap()[0].id, "usv-1");
     }
 }

@@ -220,7 +220,7 @@ pub async fn evaluate(
 }
 
 fn parse<T: serde::de::DeserializeOwned>(body: &Bytes) -> Result<T, ApiError> {
-    serde_json::from_slice(body).map_err(|e| ApiError::Malformed(e.to_string()))
+    serde_json::from_slice(body).map_err(|e| ApiError::Malformed(crate::protocol::json_error(&e)))
 }
 
 /// Hands a change to the tick task and waits for its verdict.

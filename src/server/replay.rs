@@ -454,8 +454,10 @@ async fn set(
     State(replay): State<ReplayState>,
     body: axum::body::Bytes,
 ) -> Result<Json<ReplayStatus>, ApiError> {
-    let control: ReplayControl = serde_json::from_slice(&body)
-        .map_err(|e| ApiError::Malformed(format!("expected {{playing, speed, time}}: {e}")))?;
+    let control: ReplayControl = serde_json::from_slice(&body).map_err(|e| {
+        let why = crate::protocol::json_error(&e);
+        ApiError::Malformed(format!("expected {{playing, speed, time}}: {why}"))
+    })?;
     let (tx, rx) = oneshot::channel();
     replay
         .control

@@ -195,112 +195,164 @@ fn parse(text: &str) -> Result<VesselMessage, serde_json::Error> {
     }
 }
 
-async fn run_link(mut socket: WebSocket, app: AppState, peer: Option<SocketAddr>) {
-    // The first frame must be a hello.
-    let hello = tokio::select! {
-        _ = app.shutdown.cancelled() => return,
+async fn run_link(socket: WebSocket, app: AppState, peer: Option<SocketAddr>) {
+    let Some((socket, hello)) = read_hello(socket, &app, peer).await else {
+        return;
+    };
+    let Some((socket, link)) = join(socket, &app, peer, hello).await else {
+        return;
+    };
+    serve(socket, &app, peer, link).await;
+}
+
+/// A hello the coordinator can register.
+struct Hello {
+    id: String,
+    actuator: Option<crate::protocol::ActuatorDocument>,
+    astern: Option<bool>,
+    agility: Option<crate::protocol::AgilityDocument>,
+    mission: Option<String>,
+    station_radius: Option<f64>,
+}
+
+/// The first frame, which must be a valid hello; a link that sends
+/// anything else is refused (and `None` returned).
+async fn read_hello(
+    mut socket: WebSocket,
+    app: &AppState,
+    peer: Option<SocketAddr>,
+) -> Option<(WebSocket, Hello)> {
+    let first = tokio::select! {
+        _ = app.shutdown.cancelled() => return None,
         first = tokio::time::timeout(Duration::from_secs(10), socket.recv()) => first,
     };
-    let (id, actuator, astern, agility, mission, station_radius) = match hello {
-        Ok(Some(Ok(Message::Text(t)))) => match parse(&t) {
-            Ok(VesselMessage::Hello {
-                vessel,
-                protocol,
-                actuator,
-                astern,
-                agility,
-                mission,
-                station_radius,
-            }) => {
-                if protocol != 1 {
-                    return refuse_hello(
-                        socket,
-                        &app,
-                        peer,
-                        Some(&vessel),
-                        "unsupported",
-                        format!("protocol {protocol}: only 1 is spoken"),
-                    )
-                    .await;
-                }
-                if !valid_id(&vessel) {
-                    return refuse_hello(
-                        socket,
-                        &app,
-                        peer,
-                        None,
-                        "invalid",
-                        "vessel: must match [A-Za-z0-9_.-]{1,64}",
-                    )
-                    .await;
-                }
-                (vessel, actuator, astern, agility, mission, station_radius)
-            }
-            Ok(VesselMessage::Pose(_)) => {
-                return refuse_hello(socket, &app, peer, None, "protocol", "a pose before hello")
-                    .await;
-            }
-            Err(e) => {
-                return refuse_hello(
-                    socket,
-                    &app,
-                    peer,
-                    None,
-                    "malformed",
-                    format!("expected hello: {e}"),
-                )
-                .await;
-            }
-        },
-        _ => return,
+    let Ok(Some(Ok(Message::Text(t)))) = first else {
+        return None;
     };
+    let (vessel, code, why) = match parse(&t) {
+        Ok(VesselMessage::Hello {
+            vessel,
+            protocol,
+            actuator,
+            astern,
+            agility,
+            mission,
+            station_radius,
+        }) => {
+            if protocol != 1 {
+                (
+                    Some(vessel),
+                    "unsupported",
+                    format!("protocol {protocol}: only 1 is spoken"),
+                )
+            } else if !valid_id(&vessel) {
+                (
+                    None,
+                    "invalid",
+                    "vessel: must match [A-Za-z0-9_.-]{1,64}".into(),
+                )
+            } else {
+                let hello = Hello {
+                    id: vessel,
+                    actuator,
+                    astern,
+                    agility,
+                    mission,
+                    station_radius,
+                };
+                return Some((socket, hello));
+            }
+        }
+        Ok(VesselMessage::Pose(_)) => (None, "protocol", "a pose before hello".into()),
+        Err(e) => (
+            None,
+            "malformed",
+            format!("expected hello: {}", crate::protocol::json_error(&e)),
+        ),
+    };
+    refuse_hello(socket, app, peer, vessel.as_deref(), code, why).await;
+    None
+}
 
-    let link = app.next_link.fetch_add(1, Ordering::Relaxed);
-    let (tx, mut rx) = mpsc::channel::<Outgoing>(16);
-    let (pose_tx, poses) = watch::channel(None);
+/// A registered link: its number, its commands and where its poses go.
+struct Link {
+    id: String,
+    number: u64,
+    commands: mpsc::Receiver<Outgoing>,
+    poses: watch::Sender<Option<PoseDocument>>,
+}
+
+/// Registers the vessel with the tick task and welcomes it; a refusal is
+/// answered and the link closed (`None`).
+async fn join(
+    mut socket: WebSocket,
+    app: &AppState,
+    peer: Option<SocketAddr>,
+    hello: Hello,
+) -> Option<(WebSocket, Link)> {
+    let number = app.next_link.fetch_add(1, Ordering::Relaxed);
+    let (tx, commands) = mpsc::channel::<Outgoing>(16);
+    let (poses, slot) = watch::channel(None);
     let (reply_tx, reply_rx) = oneshot::channel();
     let registered = app
         .requests
         .send(Request::Register {
-            id: id.clone(),
-            link,
-            actuator,
-            astern: astern.unwrap_or(true),
-            agility,
-            mission,
-            station_radius,
+            id: hello.id.clone(),
+            link: number,
+            actuator: hello.actuator,
+            astern: hello.astern.unwrap_or(true),
+            agility: hello.agility,
+            mission: hello.mission,
+            station_radius: hello.station_radius,
             tx,
-            poses,
+            poses: slot,
             reply: reply_tx,
         })
         .await
         .is_ok();
+    let id = hello.id;
     let welcomed = match (registered, reply_rx.await) {
         (true, Ok(Ok(welcomed))) => welcomed,
         (_, Ok(Err(e))) => {
-            return refuse_hello(socket, &app, peer, Some(&id), e.code(), e.to_string()).await;
+            refuse_hello(socket, app, peer, Some(&id), e.code(), e.to_string()).await;
+            return None;
         }
         _ => {
-            return refuse(
+            refuse(
                 socket,
                 error("shutting_down", "the coordinator is shutting down"),
             )
             .await;
+            return None;
         }
     };
-    if socket
-        .send(text(&CoordinatorMessage::Welcome {
-            vessel: id.clone(),
-            tick_hz: welcomed.tick_hz,
-            mission: welcomed.mission,
-        }))
-        .await
-        .is_err()
-    {
-        return;
-    }
+    let welcome = CoordinatorMessage::Welcome {
+        vessel: id.clone(),
+        tick_hz: welcomed.tick_hz,
+        mission: welcomed.mission,
+    };
+    socket.send(text(&welcome)).await.ok()?;
+    Some((
+        socket,
+        Link {
+            id,
+            number,
+            commands,
+            poses,
+        },
+    ))
+}
 
-    let vessel: std::sync::Arc<str> = id.as_str().into();
+/// What the link does after a frame.
+enum Flow {
+    Go,
+    Close,
+}
+
+/// A welcomed link: forwards its poses and writes its commands until it
+/// closes, the coordinator stops or too much garbage arrives.
+async fn serve(mut socket: WebSocket, app: &AppState, peer: Option<SocketAddr>, mut link: Link) {
+    let id = link.id.clone();
     let peer_text = peer.map_or_else(|| "?".to_string(), |p| p.to_string());
     tracing::info!(vessel = %id, peer = %peer_text, "vessel link up");
     app.recorder.event(
@@ -308,11 +360,17 @@ async fn run_link(mut socket: WebSocket, app: AppState, peer: Option<SocketAddr>
             .vessel(id.clone())
             .peer(peer),
     );
-    let mut garbage = 0;
-    let mut budget = Budget::new(app.clock.now());
-    let flooded = metrics::counter!(super::metrics::MESSAGES_REJECTED, "reason" => "rate_limited");
+    let mut reader = Reader {
+        app,
+        peer,
+        peer_text: peer_text.clone(),
+        vessel: id.as_str().into(),
+        garbage: 0,
+        budget: Budget::new(app.clock.now()),
+        flooded: metrics::counter!(super::metrics::MESSAGES_REJECTED, "reason" => "rate_limited"),
+        poses_in: metrics::counter!(super::metrics::MESSAGES_IN, "kind" => "pose"),
+    };
     // Handles looked up once: a lookup hashes the name and labels.
-    let poses_in = metrics::counter!(super::metrics::MESSAGES_IN, "kind" => "pose");
     let commands_out = metrics::counter!(super::metrics::MESSAGES_OUT, "kind" => "command");
     let command_delay = metrics::histogram!(super::metrics::COMMAND_DELAY);
     // Registered once: a fresh `cancelled()` per frame would lock the
@@ -323,79 +381,41 @@ async fn run_link(mut socket: WebSocket, app: AppState, peer: Option<SocketAddr>
         // One socket, not split: the branches' futures are dropped before a
         // handler runs, so a handler may write while the read is idle, and
         // nothing pays for the lock a split socket shares between halves.
-        tokio::select! {
+        let flow = tokio::select! {
             // In this order: a command waiting behind a pose that is being
             // read and forwarded only arrives later. Commands come once a
             // tick, so they cannot starve the poses.
             biased;
             _ = &mut shutdown => {
                 let _ = socket.send(text(&error("shutting_down", "the coordinator is shutting down"))).await;
-                break;
+                Flow::Close
             }
-            out = rx.recv() => match out {
+            out = link.commands.recv() => match out {
                 Some(Outgoing::Command { text, due, written }) => {
-                    if socket.send(Message::Text(text)).await.is_err() {
-                        break;
-                    }
+                    let sent = socket.send(Message::Text(text)).await.is_ok();
                     drop(written);
                     commands_out.increment(1);
                     command_delay.record(due.elapsed().as_secs_f64());
+                    if sent { Flow::Go } else { Flow::Close }
                 }
-                Some(Outgoing::Notice(message)) => {
-                    if socket.send(text(&message)).await.is_err() {
-                        break;
-                    }
-                }
+                Some(Outgoing::Notice(message)) => match socket.send(text(&message)).await {
+                    Ok(()) => Flow::Go,
+                    Err(_) => Flow::Close,
+                },
                 Some(Outgoing::Message(message)) => {
                     let fatal = matches!(&message, CoordinatorMessage::Error { .. });
-                    if socket.send(text(&message)).await.is_err() || fatal {
-                        break;
-                    }
+                    if socket.send(text(&message)).await.is_err() || fatal { Flow::Close } else { Flow::Go }
                 }
-                None => break,
+                None => Flow::Close,
             },
             frame = socket.recv() => match frame {
-                Some(Ok(Message::Text(t))) => match parse(&t) {
-                    Ok(VesselMessage::Pose(_)) if !budget.take(app.clock.now()) => {
-                        // Counted once each: by `error` when answered.
-                        if budget.answer(app.clock.now()) {
-                            tracing::warn!(vessel = %id, peer = %peer_text, "vessel link over {MAX_POSE_RATE} poses a mission second: poses dropped");
-                            let refusal = rejected(&app, peer, Some(&id), "rate_limited", format!("more than {MAX_POSE_RATE} poses a mission second: poses dropped"));
-                            let _ = socket.send(text(&refusal)).await;
-                        } else {
-                            flooded.increment(1);
-                        }
-                    }
-                    Ok(VesselMessage::Pose(pose)) if finite(&pose) => {
-                        poses_in.increment(1);
-                        // The clock is read only when recording: this runs
-                        // for every pose of every link.
-                        if app.recorder.is_on() {
-                            app.recorder.pose(&vessel, app.clock.now(), &pose);
-                        }
-                        pose_tx.send_replace(Some(pose));
-                    }
-                    Ok(VesselMessage::Pose(_)) => {
-                        let refusal = rejected(&app, peer, Some(&id), "invalid", "pose: every number must be finite");
-                        let _ = socket.send(text(&refusal)).await;
-                    }
-                    Ok(VesselMessage::Hello { .. }) => {
-                        let refusal = rejected(&app, peer, Some(&id), "protocol", "hello twice on one link");
-                        let _ = socket.send(text(&refusal)).await;
-                    }
-                    Err(e) => {
-                        garbage += 1;
-                        let fatal = garbage >= MAX_GARBAGE;
-                        let refusal = rejected(&app, peer, Some(&id), "malformed", format!("{e}"));
-                        let _ = socket.send(text(&refusal)).await;
-                        if fatal {
-                            break;
-                        }
-                    }
-                },
-                Some(Ok(Message::Close(_))) | None | Some(Err(_)) => break,
-                Some(Ok(_)) => {}
+                Some(Ok(Message::Text(t))) => reader.frame(&mut socket, &t, &link.poses).await,
+                Some(Ok(Message::Close(_))) | None | Some(Err(_)) => Flow::Close,
+                Some(Ok(_)) => Flow::Go,
             },
+        };
+        if let Flow::Close = flow {
+            break;
         }
     }
     let _ = socket.close().await;
@@ -405,7 +425,91 @@ async fn run_link(mut socket: WebSocket, app: AppState, peer: Option<SocketAddr>
             .vessel(id.clone())
             .peer(peer),
     );
-    let _ = app.requests.send(Request::Gone { id, link }).await;
+    let _ = app
+        .requests
+        .send(Request::Gone {
+            id,
+            link: link.number,
+        })
+        .await;
+}
+
+/// Reads a welcomed link's frames: judges each and forwards its poses.
+struct Reader<'a> {
+    app: &'a AppState,
+    peer: Option<SocketAddr>,
+    peer_text: String,
+    vessel: std::sync::Arc<str>,
+    garbage: u32,
+    budget: Budget,
+    flooded: metrics::Counter,
+    poses_in: metrics::Counter,
+}
+
+impl Reader<'_> {
+    async fn frame(
+        &mut self,
+        socket: &mut WebSocket,
+        t: &str,
+        poses: &watch::Sender<Option<PoseDocument>>,
+    ) -> Flow {
+        let (app, peer, id) = (self.app, self.peer, &*self.vessel);
+        let refusal = match parse(t) {
+            Ok(VesselMessage::Pose(_)) if !self.budget.take(app.clock.now()) => {
+                // Counted once each: by `error` when answered.
+                if !self.budget.answer(app.clock.now()) {
+                    self.flooded.increment(1);
+                    return Flow::Go;
+                }
+                tracing::warn!(vessel = %id, peer = %self.peer_text, "vessel link over {MAX_POSE_RATE} poses a mission second: poses dropped");
+                rejected(
+                    app,
+                    peer,
+                    Some(id),
+                    "rate_limited",
+                    format!("more than {MAX_POSE_RATE} poses a mission second: poses dropped"),
+                )
+            }
+            Ok(VesselMessage::Pose(pose)) if finite(&pose) => {
+                self.poses_in.increment(1);
+                // The clock is read only when recording: this runs for
+                // every pose of every link.
+                if app.recorder.is_on() {
+                    app.recorder.pose(&self.vessel, app.clock.now(), &pose);
+                }
+                poses.send_replace(Some(pose));
+                return Flow::Go;
+            }
+            Ok(VesselMessage::Pose(_)) => rejected(
+                app,
+                peer,
+                Some(id),
+                "invalid",
+                "pose: every number must be finite",
+            ),
+            Ok(VesselMessage::Hello { .. }) => {
+                rejected(app, peer, Some(id), "protocol", "hello twice on one link")
+            }
+            Err(e) => {
+                self.garbage += 1;
+                let refusal = rejected(
+                    app,
+                    peer,
+                    Some(id),
+                    "malformed",
+                    crate::protocol::json_error(&e),
+                );
+                let _ = socket.send(text(&refusal)).await;
+                return if self.garbage >= MAX_GARBAGE {
+                    Flow::Close
+                } else {
+                    Flow::Go
+                };
+            }
+        };
+        let _ = socket.send(text(&refusal)).await;
+        Flow::Go
+    }
 }
 
 /// Refuses a link's hello: logged (who and why), counted, recorded,

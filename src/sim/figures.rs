@@ -397,7 +397,14 @@ fn evolution<DB: DrawingBackend>(
         chart
             .draw_series(phi.iter().filter_map(|(q, v)| {
                 v.map(|v| {
-                    let c = ViridisRGB.get_color_normalized(v as f32, pmin as f32, pmax as f32);
+                    // A uniform map has no range to scale: its one value
+                    // takes the colour map's middle.
+                    let shade = if pmax > pmin {
+                        (v - pmin) / (pmax - pmin)
+                    } else {
+                        0.5
+                    };
+                    let c = ViridisRGB.get_color(shade as f32);
                     Rectangle::new(
                         [
                             (q.x - dx / 2.0, q.y - dy / 2.0),

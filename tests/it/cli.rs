@@ -262,6 +262,16 @@ fn unreadable_file_and_bad_flags_exit_2() {
     assert_eq!(out.status.code(), Some(2));
 }
 
+/// `seacover agent` runs in one of two modes: without either, the error
+/// names both, not only the coordinator's URL.
+#[test]
+fn an_agent_without_a_mode_names_both() {
+    let out = run(&["agent"], "");
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--server") && err.contains("--peer"), "{err}");
+}
+
 fn harbour() -> Value {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/harbour.json");
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()

@@ -85,6 +85,15 @@ async fn requests_are_checked_against_what_the_client_wrote() {
             .contains("`extra`"),
         "{body}"
     );
+    // A body of the wrong shape is refused in JSON's words, never the
+    // server's own type names.
+    let (status, body) = error_of(post(json!([])).await.unwrap()).await;
+    assert_eq!(status, StatusCode::BAD_REQUEST, "{body}");
+    let message = body["error"]["message"].as_str().unwrap();
+    assert!(
+        message.contains("expected a JSON object") && !message.contains("Document"),
+        "{body}"
+    );
     let (status, body) = error_of(
         http.put(server.http("/api/v1/mission/risk/base"))
             .json(&json!({"base": 0.2}))

@@ -41,3 +41,4 @@ mod sim;
 mod sitl_script;
 mod soak;
 mod tracking;
+mod valid_inputs;

@@ -98,6 +98,28 @@ fn writes_csv_summary_and_figures() {
     std::fs::remove_dir_all(out).unwrap();
 }
 
+/// A uniform risk map is a valid scenario: the heat map of Fig. 4 has
+/// nothing to scale, and must still be drawn (it once panicked in the
+/// colour map on a zero range).
+#[test]
+fn a_uniform_map_is_simulated_and_drawn() {
+    let out = tmp("uniform");
+    let mut doc: Value =
+        serde_json::from_str(&std::fs::read_to_string(crate::common::paper::PAPER).unwrap())
+            .unwrap();
+    doc["risk"] = serde_json::json!({"base": 0.1, "objects": []});
+    std::fs::create_dir_all(&out).unwrap();
+    let file = out.join("uniform.json");
+    std::fs::write(&file, doc.to_string()).unwrap();
+    let s = sim(
+        &out,
+        &["--scenario", file.to_str().unwrap(), "--duration", "5"],
+    );
+    assert!(s["H_end"].as_f64().unwrap() > 0.0, "{s}");
+    let png = std::fs::read(out.join("fig4-evolution.png")).expect("Fig. 4 drawn");
+    assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+}
+
 #[test]
 fn the_final_state_is_recorded_between_ticks() {
     let out = tmp("odd");

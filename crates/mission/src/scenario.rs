@@ -84,7 +84,8 @@ pub struct LocalScenario {
 
 /// Parses a scenario document as written, without placing it.
 pub fn parse_input(text: &str) -> Result<ScenarioDocument, ScenarioError> {
-    serde_json::from_str(text).map_err(|e| ScenarioError::Malformed(e.to_string()))
+    serde_json::from_str(text)
+        .map_err(|e| ScenarioError::Malformed(seacover_protocol::json_error(&e)))
 }
 
 /// Parses a scenario document and places it in the plane of its own origin.

@@ -13,12 +13,14 @@
 
 mod cell;
 mod fault;
+mod json_error;
 mod link;
 pub mod peer;
 mod schema;
 
 pub use cell::{CellDocument, EdgeDocument, EvaluationDocument};
 pub use fault::{FixDocument, QuarantineDocument};
+pub use json_error::json_error;
 pub use link::{AgilityDocument, CommandDocument, CoordinatorMessage, PoseDocument, VesselMessage};
 
 use schemars::JsonSchema;

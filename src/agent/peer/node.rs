@@ -88,7 +88,9 @@ impl Shared {
                     .map(|r| r.mission.region.clone());
                 self.table.lock().expect("table lock").set_region(region);
                 let rev = self.mission.borrow().as_ref().map(|r| r.revision);
-                tracing::info!(fleet = %self.keys.fleet, revision = ?rev, "took a new mission revision");
+                if let Some(rev) = rev {
+                    tracing::info!(fleet = %self.keys.fleet, revision = rev, "took a new mission revision");
+                }
             }
             Ok(false) => {}
             Err(why) => {

@@ -141,7 +141,14 @@ pub fn coverage(
             }),
         )
     });
-    FeatureCollection::new(cells.chain(boats))
+    // Built, not collected: a collected empty collection carries the bbox
+    // `[]`, which is not GeoJSON (RFC 7946 §5: 2 × n numbers). No feature
+    // here has a bbox, so the collection has none either.
+    FeatureCollection {
+        bbox: None,
+        features: cells.chain(boats).collect(),
+        foreign_members: None,
+    }
 }
 
 #[cfg(test)]
@@ -154,6 +161,18 @@ mod tests {
 
     fn segment_distance(q: Point, a: Point, b: Point) -> f64 {
         Piece::Segment { from: a, to: b }.distance2(q).sqrt()
+    }
+
+    /// No cells and no vessels (a mission before its first tick): an
+    /// empty collection, with no `bbox` (an empty one is not GeoJSON).
+    #[test]
+    fn an_empty_partition_is_an_empty_collection_without_a_bbox() {
+        let frame = LocalFrame::new(LatLon::new(-35.363261, 149.16523).unwrap()).unwrap();
+        let collection = serde_json::to_value(coverage(&frame, &[], &[])).unwrap();
+        assert_eq!(
+            collection,
+            json!({"type": "FeatureCollection", "features": []})
+        );
     }
 
     /// Every polygon of a curved cell in `coverage.geojson`, read back into

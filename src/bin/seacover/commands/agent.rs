@@ -5,14 +5,11 @@
 use crate::shell::{self, Preset};
 
 #[derive(clap::Args)]
+// One of the two modes, and the error says so when neither is given.
+#[command(group(clap::ArgGroup::new("mode").required(true).args(["server", "peer"])))]
 pub struct Args {
     /// Coordinator base URL, e.g. http://127.0.0.1:8080 (not with --peer).
-    #[arg(
-        long,
-        value_name = "URL",
-        required_unless_present = "peer",
-        conflicts_with = "peer"
-    )]
+    #[arg(long, value_name = "URL", conflicts_with = "peer")]
     server: Option<String>,
     /// Be members of a peer fleet instead: every vessel computes its own
     /// cell from its neighbours' beacons over Zenoh; no coordinator needed
@@ -43,10 +40,12 @@ pub struct Args {
     start: Option<(f64, f64, f64)>,
     #[command(flatten)]
     zenoh: crate::shell::ZenohArgs,
-    /// How many vessels (named usv-1 …); the first eight start where the
-    /// paper's do, further ones at random in the paper's region.
-    #[arg(long, value_name = "N", default_value_t = 8)]
-    vessels: usize,
+    /// How many vessels (named usv-1 …), 8 unless told; the first eight
+    /// start where the paper's do, further ones at random in the paper's
+    /// region. With --peer and a scenario as --mission, unless told: the
+    /// scenario's vessels, where it starts them.
+    #[arg(long, value_name = "N")]
+    vessels: Option<usize>,
     /// Run one vessel with this id instead (`[A-Za-z0-9_.-]{1,64}`); with
     /// --mavlink, the id of the one vehicle bridged.
     #[arg(long, value_name = "ID")]
@@ -137,8 +136,17 @@ fn parse_start(s: &str) -> Result<(f64, f64, f64), String> {
 
 async fn peer(args: Args) -> anyhow::Result<()> {
     shell::check_warp(args.time_warp)?;
-    let mut vessels =
-        seacover::agent::fleet(args.vessels, args.id, args.preset.params(), args.seed)?;
+    let scenario = match &args.mission {
+        Some(path) => Some(std::fs::read_to_string(path)?),
+        None => None,
+    };
+    let mut vessels = seacover::agent::peer_fleet(
+        scenario.as_deref(),
+        args.vessels,
+        args.id,
+        args.preset.params(),
+        args.seed,
+    )?;
     if let Some(v) = vessels
         .iter()
         .find(|v| !seacover::agent::peer::wire::valid_peer_id(&v.id))
@@ -218,7 +226,8 @@ async fn bridge(args: Args) -> anyhow::Result<()> {
 
 async fn simulate(args: Args) -> anyhow::Result<()> {
     shell::check_warp(args.time_warp)?;
-    let vessels = seacover::agent::fleet(args.vessels, args.id, args.preset.params(), args.seed)?;
+    let n = args.vessels.unwrap_or(seacover::agent::DEFAULT_VESSELS);
+    let vessels = seacover::agent::fleet(n, args.id, args.preset.params(), args.seed)?;
     let server = args.server.unwrap_or_default();
     let url = seacover::agent::link::link_url(&server).ok_or_else(|| {
         anyhow::anyhow!("--server must be an http:// or ws:// URL, got {:?}", server)
