@@ -1,5 +1,5 @@
 // WGS84 latitude and longitude ⇄ the mission's local plane, the same maths
-// as the server's src/geometry/geodesy.rs: the plane is the East-North-Up
+// as the engine's crates/engine/src/geometry/geodesy.rs: the plane is the East-North-Up
 // plane tangent to the ellipsoid at the mission's origin (x east, y north,
 // metres). Forward through ECEF; back in closed form (the line through the
 // plane point along the origin's up meets the ellipsoid where a quadratic

@@ -1,8 +1,8 @@
 """Whole-process wall time of `seacover evaluate` beside the NumPy grid, one run.
 
-SPEC §4 asks for seacover to be >= 100x faster than the usual research code on
-fleet-1000. The criterion benchmark times one evaluation in-process; this
-times what a user waits for: each side as a fresh process, from exec to exit,
+docs/performance.md sets seacover's target at >= 100x faster than the usual
+research code on fleet-1000. The criterion benchmark times one evaluation
+in-process; this times what a user waits for: each side as a fresh process, from exec to exit,
 reading the scenario and writing its result.
 
 - NumPy: `PYTHON bench/baseline/coverage_grid.py SCENARIO --out FILE` (one

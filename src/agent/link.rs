@@ -275,34 +275,7 @@ pub async fn run(
             }
             Err(e) => {
                 let wait = backoff.mul_f64(rng.random_range(0.5..1.5));
-                let retry_in_ms = wait.as_millis() as u64;
-                match &e {
-                    HandshakeError::Rejected {
-                        status: 401,
-                        message,
-                    } => {
-                        unauthorized += 1;
-                        let given = if config.token.is_some() {
-                            "the token given"
-                        } else {
-                            "no token"
-                        };
-                        tracing::error!(vessel = %config.vessel, %message, attempt = unauthorized, "the coordinator refused the link (HTTP 401, {given}): give its token with --token or the SEACOVER_TOKEN variable");
-                        if unauthorized >= MAX_UNAUTHORIZED {
-                            return Err(LinkError::Unauthorized {
-                                vessel: config.vessel.clone(),
-                                count: unauthorized,
-                                message: message.clone(),
-                            });
-                        }
-                    }
-                    HandshakeError::Refused { .. } | HandshakeError::Rejected { .. } => {
-                        tracing::warn!(vessel = %config.vessel, error = %e, retry_in_ms, "the coordinator refused the link; retrying");
-                    }
-                    _ => {
-                        tracing::info!(vessel = %config.vessel, error = %e, retry_in_ms, "cannot reach the coordinator; retrying");
-                    }
-                }
+                refused(&config, &e, wait, &mut unauthorized)?;
                 tokio::select! {
                     _ = shutdown.cancelled() => return Ok(()),
                     _ = tokio::time::sleep(wait) => {}
@@ -314,53 +287,15 @@ pub async fn run(
         unauthorized = 0;
         tracing::info!(vessel = %config.vessel, url = %config.url, "connected to the coordinator");
         backoff = Duration::from_millis(100);
-        let (mut sink, mut stream) = socket.split();
-        // The pose current at connection goes out at once, not only the
-        // next one.
-        poses.mark_changed();
-        loop {
-            tokio::select! {
-                _ = shutdown.cancelled() => {
-                    let _ = sink.send(Message::Close(None)).await;
-                    return Ok(());
-                }
-                changed = poses.changed() => {
-                    if changed.is_err() {
-                        // The vessel is gone: nothing more to report.
-                        let _ = sink.send(Message::Close(None)).await;
-                        return Ok(());
-                    }
-                    let pose = poses.borrow_and_update().clone();
-                    if let Some(pose) = pose
-                        && sink.send(text(&VesselMessage::Pose(pose))).await.is_err()
-                    {
-                        break;
-                    }
-                }
-                frame = stream.next() => match frame {
-                    Some(Ok(Message::Text(t))) => match serde_json::from_str::<CoordinatorMessage>(&t) {
-                        Ok(CoordinatorMessage::Command(c)) => {
-                            // A vessel behind on its commands wants the
-                            // next one, not a backlog.
-                            let _ = commands.try_send(Inbound::Command(c));
-                        }
-                        Ok(CoordinatorMessage::Welcome { .. }) => {}
-                        Ok(CoordinatorMessage::Mission { mission }) => {
-                            tracing::info!(vessel = %config.vessel, %mission, "the coordinator's mission changed");
-                            following = Some(mission);
-                        }
-                        Ok(CoordinatorMessage::Error { code, message }) if code == "shutting_down" => {
-                            tracing::info!(vessel = %config.vessel, %message, "coordinator stopping");
-                        }
-                        Ok(CoordinatorMessage::Error { code, message }) => {
-                            tracing::warn!(vessel = %config.vessel, %code, %message, "coordinator error");
-                        }
-                        Err(e) => tracing::warn!(vessel = %config.vessel, error = %e, "unreadable frame"),
-                    },
-                    Some(Ok(Message::Close(_))) | None | Some(Err(_)) => break,
-                    Some(Ok(_)) => {}
-                },
-            }
+        let link = Connected {
+            config: &config,
+            poses: &mut poses,
+            commands: &commands,
+            shutdown: &shutdown,
+            following: &mut following,
+        };
+        if let Ended::Stopped = link.serve(socket).await {
+            return Ok(());
         }
         if !shutdown.is_cancelled() {
             tracing::warn!(vessel = %config.vessel, "link to the coordinator lost; reconnecting");
@@ -375,6 +310,116 @@ pub async fn run(
         }
     }
     Ok(())
+}
+
+/// Says why a handshake failed; an error once the token has been refused
+/// [`MAX_UNAUTHORIZED`] times in a row.
+fn refused(
+    config: &LinkConfig,
+    e: &HandshakeError,
+    wait: Duration,
+    unauthorized: &mut u32,
+) -> Result<(), LinkError> {
+    let retry_in_ms = wait.as_millis() as u64;
+    match e {
+        HandshakeError::Rejected {
+            status: 401,
+            message,
+        } => {
+            *unauthorized += 1;
+            let given = if config.token.is_some() {
+                "the token given"
+            } else {
+                "no token"
+            };
+            tracing::error!(vessel = %config.vessel, %message, attempt = *unauthorized, "the coordinator refused the link (HTTP 401, {given}): give its token with --token or the SEACOVER_TOKEN variable");
+            if *unauthorized >= MAX_UNAUTHORIZED {
+                return Err(LinkError::Unauthorized {
+                    vessel: config.vessel.clone(),
+                    count: *unauthorized,
+                    message: message.clone(),
+                });
+            }
+        }
+        HandshakeError::Refused { .. } | HandshakeError::Rejected { .. } => {
+            tracing::warn!(vessel = %config.vessel, error = %e, retry_in_ms, "the coordinator refused the link; retrying");
+        }
+        _ => {
+            tracing::info!(vessel = %config.vessel, error = %e, retry_in_ms, "cannot reach the coordinator; retrying");
+        }
+    }
+    Ok(())
+}
+
+/// How a connection ended.
+enum Ended {
+    /// Shutdown, or the vessel is gone: the link ends.
+    Stopped,
+    /// The connection was lost: the link reconnects.
+    Lost,
+}
+
+/// A welcomed connection's loop: poses out, commands in.
+struct Connected<'a> {
+    config: &'a LinkConfig,
+    poses: &'a mut watch::Receiver<Option<PoseDocument>>,
+    commands: &'a mpsc::Sender<Inbound>,
+    shutdown: &'a CancellationToken,
+    following: &'a mut Option<String>,
+}
+
+impl Connected<'_> {
+    async fn serve(self, socket: Socket) -> Ended {
+        let vessel = &self.config.vessel;
+        let (mut sink, mut stream) = socket.split();
+        // The pose current at connection goes out at once, not only the
+        // next one.
+        self.poses.mark_changed();
+        loop {
+            tokio::select! {
+                _ = self.shutdown.cancelled() => {
+                    let _ = sink.send(Message::Close(None)).await;
+                    return Ended::Stopped;
+                }
+                changed = self.poses.changed() => {
+                    if changed.is_err() {
+                        // The vessel is gone: nothing more to report.
+                        let _ = sink.send(Message::Close(None)).await;
+                        return Ended::Stopped;
+                    }
+                    let pose = self.poses.borrow_and_update().clone();
+                    if let Some(pose) = pose
+                        && sink.send(text(&VesselMessage::Pose(pose))).await.is_err()
+                    {
+                        return Ended::Lost;
+                    }
+                }
+                frame = stream.next() => match frame {
+                    Some(Ok(Message::Text(t))) => match serde_json::from_str::<CoordinatorMessage>(&t) {
+                        Ok(CoordinatorMessage::Command(c)) => {
+                            // A vessel behind on its commands wants the
+                            // next one, not a backlog.
+                            let _ = self.commands.try_send(Inbound::Command(c));
+                        }
+                        Ok(CoordinatorMessage::Welcome { .. }) => {}
+                        Ok(CoordinatorMessage::Mission { mission }) => {
+                            tracing::info!(%vessel, %mission, "the coordinator's mission changed");
+                            *self.following = Some(mission);
+                        }
+                        Ok(CoordinatorMessage::Error { code, message }) if code == "shutting_down" => {
+                            tracing::info!(%vessel, %message, "coordinator stopping");
+                        }
+                        Ok(CoordinatorMessage::Error { code, message }) => {
+                            tracing::warn!(%vessel, %code, %message, "coordinator error");
+                        }
+                        Err(e) => tracing::warn!(%vessel, error = %e, "unreadable frame"),
+                    },
+                    Some(Ok(Message::Close(_))) | None | Some(Err(_)) => return Ended::Lost,
+                    Some(Ok(_)) => {}
+                },
+            }
+        }
+    }
 }
 
 #[cfg(test)]

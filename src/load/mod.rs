@@ -57,19 +57,20 @@
 //! up in the latencies. Receive times are taken when a link's task reads
 //! the frame, so a saturated client inflates the latencies as well.
 //!
-//! Layout: [`report`] is the report and its table, [`scrape`] reads the
+//! Layout: [`report`] is the report and its table, [`measure`] makes it
+//! from what the links and the scrapes saw, [`scrape`] reads the
 //! coordinator's `/metrics` and the machine's `/proc/stat`, [`link`] is one
 //! vessel link's task (over the agent's own handshake).
 
 mod link;
+mod measure;
 mod report;
 mod scrape;
 
 pub use report::{CoordinatorFigures, Latency, LinkCounts, LoadReport, TargetCheck};
 
 use link::{LinkOutcome, Shared, run_link};
-use report::{kib, opt};
-use scrape::{Scrape, bucket_latency, delta, machine_shares, parse_scrape, unix_now};
+use scrape::{Scrape, parse_scrape, unix_now};
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, OnceLock};
@@ -227,25 +228,10 @@ pub async fn run(config: LoadConfig, shutdown: CancellationToken) -> Result<Load
     let base = config.server.trim_end_matches('/').to_string();
     let ws_url = ws_url(&base)?;
     let mut notes = Vec::new();
-
-    // 1000 links need 1000 descriptors on top of the runtime's own.
-    let wanted = config.vessels as u64 + 256;
-    match rlimit::increase_nofile_limit(u64::MAX) {
-        Ok(limit) if limit < wanted => notes.push(format!(
-            "the open-file limit is {limit}; {wanted} descriptors are wanted, so links may fail"
-        )),
-        Ok(_) => {}
-        Err(e) => notes.push(format!("could not raise the open-file limit: {e}")),
-    }
+    raise_file_limit(config.vessels, &mut notes);
 
     let http = reqwest::Client::new();
-    let mission_text = get_text(&http, format!("{base}/api/v1/mission")).await?;
-    let mission: MissionDocument = serde_json::from_str(&mission_text).map_err(|e| {
-        LoadError::Config(format!(
-            "{base}/api/v1/mission is not a mission document: {e}"
-        ))
-    })?;
-    let region = crate::mission::scenario::region_from_document(&mission.region)?;
+    let (mission, region) = fetch_mission(&http, &base).await?;
     let metrics_url = format!("{base}/metrics");
     let scrape = async || -> Result<Scrape, LoadError> {
         let text = get_text(&http, metrics_url.clone()).await?;
@@ -285,27 +271,7 @@ pub async fn run(config: LoadConfig, shutdown: CancellationToken) -> Result<Load
         })
         .collect();
 
-    // Every link connected (or failed) and commanded, then the warm-up.
-    let settle_until = Instant::now() + SETTLE;
-    let mut cancelled = false;
-    loop {
-        let settled = shared.settled.load(Ordering::Relaxed);
-        let commanded = shared.commanded.load(Ordering::Relaxed);
-        if settled == n && commanded >= shared.welcomed.load(Ordering::Relaxed) {
-            break;
-        }
-        if Instant::now() >= settle_until {
-            notes.push(format!(
-                "after {} s only {commanded} of {n} links had a command; measured anyway",
-                SETTLE.as_secs()
-            ));
-            break;
-        }
-        if sleep_or(&shutdown, Duration::from_millis(20)).await {
-            cancelled = true;
-            break;
-        }
-    }
+    let mut cancelled = settle(&shared, n, &shutdown, &mut notes).await;
     // Nothing to measure without a link.
     cancelled |= shared.welcomed.load(Ordering::Relaxed) == 0;
     let warmup_started = Instant::now();
@@ -343,194 +309,75 @@ pub async fn run(config: LoadConfig, shutdown: CancellationToken) -> Result<Load
             ..LinkOutcome::default()
         }));
     }
-    let connected = outcomes.iter().filter(|o| o.connected).count();
-    if connected == 0 {
-        let why = outcomes
-            .iter()
-            .find_map(|o| o.problem.clone())
-            .unwrap_or_else(|| "cancelled".into());
-        return Err(LoadError::NoLinks(why));
-    }
-    let held = outcomes
-        .iter()
-        .filter(|o| o.connected && o.ended_at.is_none_or(|at| at >= window_end))
-        .count();
-    let window = (window_end - window_start).as_secs_f64();
-
-    let mut pose_latency = Vec::new();
-    let mut offsets = Vec::new();
-    let (mut commands, mut poses) = (0, 0);
-    for o in &mut outcomes {
-        commands += o.commands;
-        poses += o.poses;
-        pose_latency.append(&mut o.pose_latency);
-        offsets.append(&mut o.tick_offsets);
-    }
-    // When each tick was due, on this client's clock. The coordinator
-    // publishes its tick origin and period; on the same host (one wall
-    // clock) that gives every command's exact delay. A delay below zero
-    // means the clocks differ (another host): then estimate the origin from
-    // the fastest delivery, which under-states every delay by that one.
-    let published = match (start.tick_origin, start.tick_period) {
-        (Some(origin), Some(period)) if period > 0.0 => Some((origin - shared.origin_unix, period)),
-        _ => None,
-    }
-    .filter(|&(origin, period)| {
-        offsets
-            .iter()
-            .all(|&(tick, at)| at - (origin + tick as f64 * period) > -1e-3)
-    });
-    let (tick_clock, delays): (&str, Vec<(u64, f64)>) = match published {
-        Some((origin, period)) => (
-            "published",
-            offsets
-                .iter()
-                .map(|&(tick, at)| (tick, at - (origin + tick as f64 * period)))
-                .collect(),
-        ),
-        None => {
-            let due = |tick: u64| tick as f64 / shared.tick_rate;
-            let t0 = offsets
-                .iter()
-                .map(|&(tick, at)| at - due(tick))
-                .fold(f64::INFINITY, f64::min);
-            (
-                "estimated",
-                offsets
-                    .iter()
-                    .map(|&(tick, at)| (tick, at - due(tick) - t0))
-                    .collect(),
-            )
-        }
-    };
-    if tick_clock == "estimated" && !offsets.is_empty() {
-        notes.push(
-            "the coordinator's tick clock could not be used (not published, or on another \
-             host's clock): tick → command is measured from the fastest delivery seen and \
-             under-states every delay by that delivery's own"
-                .into(),
-        );
-    }
-    let tick_delay: Vec<f64> = delays.iter().map(|d| d.1).collect();
-    // Per tick: its first delivery (the tick's start and evaluation) and
-    // the spread to its last (sending every link its command).
-    let mut ticks: std::collections::HashMap<u64, (f64, f64)> = std::collections::HashMap::new();
-    for &(tick, d) in &delays {
-        let e = ticks.entry(tick).or_insert((d, d));
-        (e.0, e.1) = (e.0.min(d), e.1.max(d));
-    }
-    let first_delivery = Latency::of(ticks.values().map(|(first, _)| *first).collect());
-    let delivery_spread = Latency::of(ticks.values().map(|(first, last)| last - first).collect());
-
-    let wall = end.at - start.at;
-    let per_core =
-        |a: Option<f64>, b: Option<f64>| delta(a, b).map(|d| d / wall.as_secs_f64().max(1e-9));
-    let tick_mean_ms = match (
-        delta(start.tick_sum, end.tick_sum),
-        delta(start.tick_count, end.tick_count),
-    ) {
-        (Some(s), Some(c)) if c > 0.0 => Some(1e3 * s / c),
-        _ => None,
-    };
-    let coordinator = CoordinatorFigures {
-        cpu_cores: per_core(start.cpu, end.cpu),
-        rss_before_links_bytes: before_links.rss,
-        rss_with_links_bytes: end.rss,
-        memory_per_vessel_bytes: delta(before_links.rss, end.rss).map(|d| d / connected as f64),
-        ticks_skipped: delta(start.ticks_skipped, end.ticks_skipped),
-        commands_dropped_link_full: delta(start.link_full, end.link_full),
-        tick_mean_ms,
-        command_delay_ms: bucket_latency(&start.command_delay, &end.command_delay),
-    };
-    if coordinator.cpu_cores.is_none() || coordinator.rss_with_links_bytes.is_none() {
-        notes.push(
-            "the coordinator's /metrics has no process_cpu_seconds_total or \
-             process_resident_memory_bytes (not Linux, or an older seacover)"
-                .into(),
-        );
-    }
-    if coordinator.ticks_skipped.is_some_and(|s| s > 0.0) {
-        notes.push(
-            "the coordinator skipped ticks in the window: tick → command is inflated by one \
-             tick period per skip after it"
-                .into(),
-        );
-    }
     if interrupted {
         notes.push("interrupted: the window is shorter than asked".into());
     }
-
-    let (busy, steal) = machine_shares(start.machine, end.machine);
-    let tick_to_command_ms = Latency::of(tick_delay);
-    let pose_to_command_ms = Latency::of(pose_latency);
-    let links = LinkCounts {
-        requested: n,
-        connected,
-        held,
-        dropped: connected - held,
-        failed: n - connected,
-        first_problem: outcomes
-            .iter()
-            .filter(|o| !o.connected || o.ended_at.is_some_and(|at| at < window_end))
-            .find_map(|o| o.problem.clone()),
-    };
-    let targets = vec![
-        TargetCheck {
-            what: "links".into(),
-            target: "none dropped".into(),
-            value: format!("{held} of {n} held"),
-            met: Some(held == n),
-        },
-        TargetCheck {
-            what: "latency".into(),
-            target: "p99 ≤ 20 ms".into(),
-            value: tick_to_command_ms.text(),
-            met: tick_to_command_ms.p99.map(|p| p <= 20.0),
-        },
-        TargetCheck {
-            what: "cpu".into(),
-            target: "≤ 1 core".into(),
-            value: opt(coordinator.cpu_cores, |v| format!("{v:.2} cores")),
-            met: coordinator.cpu_cores.map(|c| c <= 1.0),
-        },
-        TargetCheck {
-            what: "memory".into(),
-            target: "≤ 64 KiB per vessel".into(),
-            value: opt(coordinator.memory_per_vessel_bytes, kib),
-            met: coordinator
-                .memory_per_vessel_bytes
-                .map(|m| m <= 64.0 * 1024.0),
-        },
-    ];
-    Ok(LoadReport {
-        server: base,
-        vessels: n,
-        rate_hz: config.rate_hz,
+    measure::report(measure::Measured {
+        base,
+        config: &config,
         tick_hz: mission.tick_hz,
-        time_warp: config.time_warp,
-        window_s: window,
-        warmup_s: warmup.as_secs_f64(),
-        links,
-        commands_received: commands,
-        commands_expected: n as f64 * shared.tick_rate * window,
-        poses_sent: poses,
-        pose_rate_per_link_hz: if window > 0.0 {
-            poses as f64 / (n as f64 * window)
-        } else {
-            0.0
-        },
-        pose_to_command_ms,
-        tick_to_command_ms,
-        tick_clock: tick_clock.into(),
-        tick_first_delivery_ms: first_delivery,
-        tick_delivery_spread_ms: delivery_spread,
-        coordinator,
-        client_cpu_cores: per_core(start.client_cpu, end.client_cpu),
-        machine_busy_percent: busy,
-        machine_steal_percent: steal,
-        targets,
+        shared: &shared,
+        outcomes,
+        scrapes: [before_links, start, end],
+        window: (window_start, window_end),
+        warmup,
         notes,
     })
+}
+
+/// 1000 links need 1000 descriptors on top of the runtime's own.
+fn raise_file_limit(vessels: usize, notes: &mut Vec<String>) {
+    let wanted = vessels as u64 + 256;
+    match rlimit::increase_nofile_limit(u64::MAX) {
+        Ok(limit) if limit < wanted => notes.push(format!(
+            "the open-file limit is {limit}; {wanted} descriptors are wanted, so links may fail"
+        )),
+        Ok(_) => {}
+        Err(e) => notes.push(format!("could not raise the open-file limit: {e}")),
+    }
+}
+
+/// The coordinator's mission and its region.
+async fn fetch_mission(
+    http: &reqwest::Client,
+    base: &str,
+) -> Result<(MissionDocument, Region), LoadError> {
+    let mission_text = get_text(http, format!("{base}/api/v1/mission")).await?;
+    let mission: MissionDocument = serde_json::from_str(&mission_text).map_err(|e| {
+        LoadError::Config(format!(
+            "{base}/api/v1/mission is not a mission document: {e}"
+        ))
+    })?;
+    let region = crate::mission::scenario::region_from_document(&mission.region)?;
+    Ok((mission, region))
+}
+
+/// Waits until every link connected (or failed) and has a command, at
+/// most [`SETTLE`]; `true` when cancelled.
+async fn settle(
+    shared: &Shared,
+    n: usize,
+    shutdown: &CancellationToken,
+    notes: &mut Vec<String>,
+) -> bool {
+    let settle_until = Instant::now() + SETTLE;
+    loop {
+        let settled = shared.settled.load(Ordering::Relaxed);
+        let commanded = shared.commanded.load(Ordering::Relaxed);
+        if settled == n && commanded >= shared.welcomed.load(Ordering::Relaxed) {
+            return false;
+        }
+        if Instant::now() >= settle_until {
+            notes.push(format!(
+                "after {} s only {commanded} of {n} links had a command; measured anyway",
+                SETTLE.as_secs()
+            ));
+            return false;
+        }
+        if sleep_or(shutdown, Duration::from_millis(20)).await {
+            return true;
+        }
+    }
 }
 
 #[cfg(test)]

@@ -147,50 +147,12 @@ pub async fn run(
     if !wire::valid_fleet(&member.fleet) {
         return Err(PeerError::Fleet);
     }
-    let zerr = |e: zenoh::Error| PeerError::Zenoh(e.to_string());
     let session = zenoh::open(member.zenoh.config()?).await.map_err(zerr)?;
     let keys = Keys {
         fleet: member.fleet.clone(),
     };
-    let own = app.snapshot.borrow().document.mission.clone();
-    let found = fleet_mission(&session, &keys).await;
-    // Whether another member has answered: until then a mission published
-    // as "the fleet's first" is provisional, since on a busy or slow link
-    // the first query can miss a fleet that is there.
-    let mut settled = found.is_some();
-    // (revision, mission, its document as published, whether to put it)
-    let (revision, own, first, put_first) = match found {
-        Some(doc) if doc.mission == own || !member.replace => {
-            if doc.mission != own {
-                adopt(&app, &doc).await?;
-            }
-            let json = Arc::new(serde_json::to_vec(&doc).expect("documents serialize"));
-            // The coordinator's own view of it, which later writes change.
-            let own = app.snapshot.borrow().document.mission.clone();
-            (doc.revision, own, json, false)
-        }
-        Some(doc) => {
-            tracing::warn!(
-                replaced = doc.revision,
-                by = doc.by.as_deref().unwrap_or("?"),
-                "replacing the fleet's mission (--replace-fleet-mission)"
-            );
-            let r = doc.revision + 1;
-            (
-                r,
-                own.clone(),
-                ours(r, &own, "--replace-fleet-mission"),
-                true,
-            )
-        }
-        None => (
-            0,
-            own.clone(),
-            ours(0, &own, "the fleet's first mission"),
-            true,
-        ),
-    };
-    let published: Arc<Mutex<Arc<Vec<u8>>>> = Arc::new(Mutex::new(first));
+    let joined = join(&app, &session, &keys, member.replace).await?;
+    let published = Arc::new(Mutex::new(joined.first));
     let mission_key = keys.mission();
     let answer = published.clone();
     let _queryable = session
@@ -209,10 +171,13 @@ pub async fn run(
         .priority(zenoh::qos::Priority::InteractiveHigh)
         .await
         .map_err(zerr)?;
-    let put = |json: &Arc<Vec<u8>>| publisher.put(json.as_slice().to_vec());
-    if put_first {
+    let revision = joined.revision;
+    if joined.put_first {
         let first = published.lock().expect("mission lock").clone();
-        put(&first).await.map_err(zerr)?;
+        publisher
+            .put(first.as_slice().to_vec())
+            .await
+            .map_err(zerr)?;
         tracing::info!(fleet = %member.fleet, revision, "joined the peer fleet; mission published");
     } else {
         tracing::info!(fleet = %member.fleet, revision, "joined the peer fleet; working on its mission");
@@ -220,9 +185,132 @@ pub async fn run(
     metrics::gauge!(PEER_REVISION).set(revision as f64);
 
     let (events, mut incoming) = mpsc::channel::<Event>(4096);
+    let _subscribers = subscribe(&session, &keys, events).await?;
+    let mut state = Member {
+        app: &app,
+        session: &session,
+        keys: &keys,
+        replace: member.replace,
+        publisher,
+        published,
+        revision,
+        settled: joined.settled,
+        put_at: tokio::time::Instant::now(),
+        repeat: REPEAT_FIRST,
+        last: joined.own,
+        asked: None,
+        heard: BTreeMap::new(),
+        refused: BTreeMap::new(),
+        snapshots: app.snapshot.clone(),
+    };
+    // Each vessel's own neighbour count, asked of the fleet every second.
+    let mut ask = tokio::time::interval(Duration::from_secs(1));
+    ask.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+    let (counts_tx, mut counts) = mpsc::channel::<BTreeMap<String, u32>>(2);
+    loop {
+        tokio::select! {
+            _ = shutdown.cancelled() => break,
+            _ = ask.tick() => ask_neighbours(&app, &session, &keys, counts_tx.clone()),
+            Some(found) = counts.recv() => {
+                if !found.is_empty() {
+                    let _ = app.requests.send(Request::PeerNeighbours(found)).await;
+                }
+            }
+            Ok(()) = state.snapshots.changed() => state.on_snapshot().await,
+            Some(event) = incoming.recv() => match event {
+                Event::Beacon(id, bytes) => state.on_beacon(id, &bytes).await,
+                Event::Gone(id) => state.on_gone(id).await,
+            },
+        }
+    }
+    for (id, h) in std::mem::take(&mut state.heard) {
+        let _ = app.requests.send(Request::Gone { id, link: h.link }).await;
+    }
+    drop(state);
+    let _ = session.close().await;
+    Ok(())
+}
+
+fn zerr(e: zenoh::Error) -> PeerError {
+    PeerError::Zenoh(e.to_string())
+}
+
+/// What joining decided.
+struct Joined {
+    revision: u32,
+    /// The coordinator's own mission as it stands after joining.
+    own: MissionDocument,
+    /// The revision's document as published.
+    first: Arc<Vec<u8>>,
+    /// Whether this member puts it (its own or a replacing revision).
+    put_first: bool,
+    /// Whether another member has answered: until then a mission published
+    /// as "the fleet's first" is provisional, since on a busy or slow link
+    /// the first query can miss a fleet that is there.
+    settled: bool,
+}
+
+/// Asks the fleet for its mission and decides which one this member works
+/// on (see the module doc's invariants).
+async fn join(
+    app: &AppState,
+    session: &zenoh::Session,
+    keys: &Keys,
+    replace: bool,
+) -> Result<Joined, PeerError> {
+    let own = app.snapshot.borrow().document.mission.clone();
+    let found = fleet_mission(session, keys).await;
+    let settled = found.is_some();
+    Ok(match found {
+        Some(doc) if doc.mission == own || !replace => {
+            if doc.mission != own {
+                adopt(app, &doc).await?;
+            }
+            Joined {
+                revision: doc.revision,
+                // The coordinator's own view of it, which later writes change.
+                own: app.snapshot.borrow().document.mission.clone(),
+                first: Arc::new(serde_json::to_vec(&doc).expect("documents serialize")),
+                put_first: false,
+                settled,
+            }
+        }
+        Some(doc) => {
+            tracing::warn!(
+                replaced = doc.revision,
+                by = doc.by.as_deref().unwrap_or("?"),
+                "replacing the fleet's mission (--replace-fleet-mission)"
+            );
+            let revision = doc.revision + 1;
+            Joined {
+                revision,
+                first: ours(revision, &own, "--replace-fleet-mission"),
+                own,
+                put_first: true,
+                settled,
+            }
+        }
+        None => Joined {
+            revision: 0,
+            first: ours(0, &own, "the fleet's first mission"),
+            own,
+            put_first: true,
+            settled,
+        },
+    })
+}
+
+/// The fleet's beacons and liveliness, handed to the member's task as
+/// [`Event`]s (a full channel drops a beacon: the vessel's next one
+/// supersedes it).
+async fn subscribe(
+    session: &zenoh::Session,
+    keys: &Keys,
+    events: mpsc::Sender<Event>,
+) -> Result<(zenoh::pubsub::Subscriber<()>, zenoh::pubsub::Subscriber<()>), PeerError> {
     let tx = events.clone();
-    let fleet = member.fleet.clone();
-    let _beacons = session
+    let fleet = keys.fleet.clone();
+    let beacons = session
         .declare_subscriber(Keys::all_beacons())
         .callback(move |sample| {
             let key = sample.key_expr().as_str();
@@ -231,8 +319,6 @@ pub async fn run(
                     metrics::counter!(PEER_REFUSED, "reason" => "other_fleet").increment(1);
                 }
                 Some((_, id)) => {
-                    // Full: this beacon is dropped; the vessel's next one
-                    // supersedes it anyway.
                     let _ = tx.try_send(Event::Beacon(
                         id.to_string(),
                         sample.payload().to_bytes().to_vec(),
@@ -243,8 +329,7 @@ pub async fn run(
         })
         .await
         .map_err(zerr)?;
-    let tx = events.clone();
-    let _alive = session
+    let alive = session
         .liveliness()
         .declare_subscriber(keys.alive_all())
         .history(true)
@@ -252,185 +337,229 @@ pub async fn run(
             if sample.kind() == SampleKind::Delete
                 && let Some(id) = sample.key_expr().as_str().rsplit('/').next()
             {
-                let _ = tx.try_send(Event::Gone(id.to_string()));
+                let _ = events.try_send(Event::Gone(id.to_string()));
             }
         })
         .await
         .map_err(zerr)?;
+    Ok((beacons, alive))
+}
 
-    let mut snapshots = app.snapshot.clone();
-    let mut revision = revision;
-    // When the revision last went out, and how long a vessel may beacon an
-    // older one before it goes out again (doubling while any lags).
-    let mut put_at = tokio::time::Instant::now();
-    let mut repeat = REPEAT_FIRST;
-    let mut last = own;
-    // When the fleet was last asked for a newer revision than ours.
-    let mut asked: Option<tokio::time::Instant> = None;
-    let mut heard: BTreeMap<String, Heard> = BTreeMap::new();
-    // Vessels the tick task refused (an actuator out of range, a full
-    // fleet), with the actuator they had: asked again only when it changes.
-    let mut refused: BTreeMap<String, (f64, f64)> = BTreeMap::new();
-    // Each vessel's own neighbour count, asked of the fleet every second.
-    let mut ask = tokio::time::interval(Duration::from_secs(1));
-    ask.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
-    let (counts_tx, mut counts) = mpsc::channel::<BTreeMap<String, u32>>(2);
-    loop {
-        tokio::select! {
-            _ = shutdown.cancelled() => break,
-            _ = ask.tick() => {
-                let (session, selector, tx) = (session.clone(), keys.status_all(), counts_tx.clone());
-                // Off this loop: a query waits for its replies.
-                app.tracker.spawn(async move {
-                    let Ok(replies) = session.get(selector).timeout(Duration::from_millis(800)).await else {
-                        return;
-                    };
-                    let mut found = BTreeMap::new();
-                    while let Ok(reply) = replies.recv_async().await {
-                        if let Ok(sample) = reply.result()
-                            && let Ok(doc) = serde_json::from_slice::<crate::protocol::peer::PeerStatusDocument>(&sample.payload().to_bytes())
-                        {
-                            found.insert(doc.id, doc.neighbours as u32);
-                        }
-                    }
-                    let _ = tx.try_send(found);
-                });
+/// Asks every vessel for its own neighbour count, off the member's loop (a
+/// query waits for its replies); the answers come back on `tx`.
+fn ask_neighbours(
+    app: &AppState,
+    session: &zenoh::Session,
+    keys: &Keys,
+    tx: mpsc::Sender<BTreeMap<String, u32>>,
+) {
+    let (session, selector) = (session.clone(), keys.status_all());
+    app.tracker.spawn(async move {
+        let Ok(replies) = session
+            .get(selector)
+            .timeout(Duration::from_millis(800))
+            .await
+        else {
+            return;
+        };
+        let mut found = BTreeMap::new();
+        while let Ok(reply) = replies.recv_async().await {
+            if let Ok(sample) = reply.result()
+                && let Ok(doc) = serde_json::from_slice::<
+                    crate::protocol::peer::PeerStatusDocument,
+                >(&sample.payload().to_bytes())
+            {
+                found.insert(doc.id, doc.neighbours as u32);
             }
-            Some(found) = counts.recv() => {
-                if !found.is_empty() {
-                    let _ = app.requests.send(Request::PeerNeighbours(found)).await;
-                }
-            }
-            Ok(()) = snapshots.changed() => {
-                let mission = snapshots.borrow_and_update().document.mission.clone();
-                if mission != last {
-                    revision += 1;
-                    let json = ours(revision, &mission, "an operator's write");
-                    *published.lock().expect("mission lock") = json.clone();
-                    if let Err(e) = put(&json).await {
-                        tracing::warn!(error = %e, "mission revision not published");
-                    }
-                    (put_at, repeat) = (tokio::time::Instant::now(), REPEAT_FIRST);
-                    metrics::gauge!(PEER_REVISION).set(revision as f64);
-                    tracing::info!(revision, "published a new mission revision to the fleet");
-                    last = mission;
-                }
-            }
-            Some(event) = incoming.recv() => match event {
-                Event::Beacon(id, bytes) => {
-                    let beacon = match wire::decode(&bytes, &id) {
-                        Ok(b) => b,
-                        Err(why) => {
-                            metrics::counter!(PEER_REFUSED, "reason" => why.name()).increment(1);
-                            continue;
-                        }
-                    };
-                    app.recorder.beacon(app.clock.now(), &beacon);
-                    let pose = PoseDocument {
-                        t: beacon.t,
-                        x: beacon.x,
-                        y: beacon.y,
-                        psi: beacon.psi,
-                        u: beacon.u,
-                        v: beacon.v,
-                        r: beacon.r,
-                        controlled: Some(beacon.controlled),
-                        telemetry: None,
-                        fix: None,
-                    };
-                    // A vessel works on a revision above ours (ours from
-                    // before a restart), or on any revision while ours is
-                    // provisional (the same number may be another mission):
-                    // the fleet is asked, and what it holds wins unless this
-                    // coordinator was told to replace it.
-                    // Asked at most every 2 s: the query waits up to 1 s.
-                    let unsure = beacon.rev > revision || (!settled && beacon.rev == revision);
-                    if unsure && asked.is_none_or(|a| a.elapsed() >= Duration::from_secs(2)) {
-                        asked = Some(tokio::time::Instant::now());
-                        let doc = fleet_mission(&session, &keys).await;
-                        settled |= doc.is_some();
-                        // Another member made it, or the first query missed
-                        // it: take it, as on joining.
-                        let differs = |d: &PeerMissionDocument| {
-                            d.revision > revision || (d.revision == revision && d.mission != last)
-                        };
-                        match doc {
-                            Some(doc) if differs(&doc) && !member.replace => {
-                                if let Err(e) = adopt(&app, &doc).await {
-                                    tracing::warn!(error = %e, "the fleet's newer mission was not taken");
-                                    continue;
-                                }
-                                revision = doc.revision;
-                                last = app.snapshot.borrow().document.mission.clone();
-                                *published.lock().expect("mission lock") = Arc::new(serde_json::to_vec(&doc).expect("documents serialize"));
-                                metrics::gauge!(PEER_REVISION).set(revision as f64);
-                                // The adopted mission's snapshot is not a write.
-                                snapshots.borrow_and_update();
-                            }
-                            d if member.replace && (beacon.rev > revision || d.as_ref().is_some_and(differs)) => {
-                                revision = beacon.rev.max(d.map_or(0, |d| d.revision)) + 1;
-                                let json = ours(revision, &last, "--replace-fleet-mission");
-                                *published.lock().expect("mission lock") = json.clone();
-                                if let Err(e) = put(&json).await {
-                                    tracing::warn!(error = %e, "mission revision not published");
-                                }
-                                (put_at, repeat) = (tokio::time::Instant::now(), REPEAT_FIRST);
-                                metrics::gauge!(PEER_REVISION).set(revision as f64);
-                                tracing::info!(revision, "the fleet had a newer revision: the mission published again above it (--replace-fleet-mission)");
-                            }
-                            // Not found yet: asked again at the next beacon.
-                            _ => {}
-                        }
-                    }
-                    // A vessel still on an older revision once the put had
-                    // time to arrive: the put was lost to it (UDP, a link
-                    // down), and so perhaps to its neighbours, whose beacons
-                    // would otherwise tell it to ask. Published again, at
-                    // doubling intervals while any vessel lags, so one that
-                    // refuses the document costs little.
-                    if beacon.rev < revision && put_at.elapsed() >= repeat {
-                        let json = published.lock().expect("mission lock").clone();
-                        if let Err(e) = put(&json).await {
-                            tracing::warn!(error = %e, "mission revision not published");
-                        }
-                        put_at = tokio::time::Instant::now();
-                        repeat = (repeat * 2).min(REPEAT_MAX);
-                        tracing::debug!(vessel = %id, held = beacon.rev, revision, "a vessel lags: the revision published again");
-                    }
-                    if let Some(h) = heard.get(&id) {
-                        h.poses.send_replace(Some(pose));
-                        continue;
-                    }
-                    if refused.get(&id) == Some(&(beacon.k, beacon.beta)) {
-                        continue;
-                    }
-                    // The vessel's actuator: the mission's when the beacon
-                    // carries it as the wire rounds it.
-                    let mission = &last.actuator;
-                    let actuator = if wire::wire_actuator(mission.k, mission.beta) == (beacon.k, beacon.beta) {
-                        *mission
-                    } else {
-                        ActuatorDocument { k: beacon.k, beta: beacon.beta }
-                    };
-                    match register(&app, &id, actuator, pose).await {
-                        Some(h) => { heard.insert(id, h); }
-                        None => { refused.insert(id, (beacon.k, beacon.beta)); }
-                    }
-                }
-                Event::Gone(id) => {
-                    refused.remove(&id);
-                    if let Some(h) = heard.remove(&id) {
-                        let _ = app.requests.send(Request::Gone { id, link: h.link }).await;
-                    }
-                }
-            },
+        }
+        let _ = tx.try_send(found);
+    });
+}
+
+/// The member between events.
+struct Member<'a> {
+    app: &'a AppState,
+    session: &'a zenoh::Session,
+    keys: &'a Keys,
+    replace: bool,
+    publisher: zenoh::pubsub::Publisher<'static>,
+    /// What the queryable answers: the revision last published or taken.
+    published: Arc<Mutex<Arc<Vec<u8>>>>,
+    revision: u32,
+    settled: bool,
+    /// When the revision last went out, and how long a vessel may beacon
+    /// an older one before it goes out again (doubling while any lags).
+    put_at: tokio::time::Instant,
+    repeat: Duration,
+    /// The mission of `revision`.
+    last: MissionDocument,
+    /// When the fleet was last asked for a newer revision than ours.
+    asked: Option<tokio::time::Instant>,
+    heard: BTreeMap<String, Heard>,
+    /// Vessels the tick task refused (an actuator out of range, a full
+    /// fleet), with the actuator they had: asked again only when it
+    /// changes.
+    refused: BTreeMap<String, (f64, f64)>,
+    snapshots: watch::Receiver<Arc<super::coordinator::Snapshot>>,
+}
+
+impl Member<'_> {
+    /// Publishes `json` as the revision now held.
+    async fn publish(&mut self, json: Arc<Vec<u8>>) {
+        *self.published.lock().expect("mission lock") = json.clone();
+        if let Err(e) = self.publisher.put(json.as_slice().to_vec()).await {
+            tracing::warn!(error = %e, "mission revision not published");
+        }
+        (self.put_at, self.repeat) = (tokio::time::Instant::now(), REPEAT_FIRST);
+        metrics::gauge!(PEER_REVISION).set(self.revision as f64);
+    }
+
+    /// An operator's write becomes a new revision.
+    async fn on_snapshot(&mut self) {
+        let mission = self.snapshots.borrow_and_update().document.mission.clone();
+        if mission != self.last {
+            self.revision += 1;
+            let json = ours(self.revision, &mission, "an operator's write");
+            self.publish(json).await;
+            tracing::info!(
+                revision = self.revision,
+                "published a new mission revision to the fleet"
+            );
+            self.last = mission;
         }
     }
-    for (id, h) in heard {
-        let _ = app.requests.send(Request::Gone { id, link: h.link }).await;
+
+    async fn on_beacon(&mut self, id: String, bytes: &[u8]) {
+        let beacon = match wire::decode(bytes, &id) {
+            Ok(b) => b,
+            Err(why) => {
+                metrics::counter!(PEER_REFUSED, "reason" => why.name()).increment(1);
+                return;
+            }
+        };
+        self.app.recorder.beacon(self.app.clock.now(), &beacon);
+        let pose = PoseDocument {
+            t: beacon.t,
+            x: beacon.x,
+            y: beacon.y,
+            psi: beacon.psi,
+            u: beacon.u,
+            v: beacon.v,
+            r: beacon.r,
+            controlled: Some(beacon.controlled),
+            telemetry: None,
+            fix: None,
+        };
+        // A vessel works on a revision above ours (ours from before a
+        // restart), or on any revision while ours is provisional (the same
+        // number may be another mission): the fleet is asked, and what it
+        // holds wins unless this coordinator was told to replace it. Asked
+        // at most every 2 s: the query waits up to 1 s.
+        let unsure = beacon.rev > self.revision || (!self.settled && beacon.rev == self.revision);
+        if unsure
+            && self
+                .asked
+                .is_none_or(|a| a.elapsed() >= Duration::from_secs(2))
+            && !self.reconcile(beacon.rev).await
+        {
+            return;
+        }
+        // A vessel still on an older revision once the put had time to
+        // arrive: the put was lost to it (UDP, a link down), and so perhaps
+        // to its neighbours, whose beacons would otherwise tell it to ask.
+        // Published again, at doubling intervals while any vessel lags, so
+        // one that refuses the document costs little.
+        if beacon.rev < self.revision && self.put_at.elapsed() >= self.repeat {
+            let json = self.published.lock().expect("mission lock").clone();
+            if let Err(e) = self.publisher.put(json.as_slice().to_vec()).await {
+                tracing::warn!(error = %e, "mission revision not published");
+            }
+            self.put_at = tokio::time::Instant::now();
+            self.repeat = (self.repeat * 2).min(REPEAT_MAX);
+            tracing::debug!(vessel = %id, held = beacon.rev, revision = self.revision, "a vessel lags: the revision published again");
+        }
+        if let Some(h) = self.heard.get(&id) {
+            h.poses.send_replace(Some(pose));
+            return;
+        }
+        if self.refused.get(&id) == Some(&(beacon.k, beacon.beta)) {
+            return;
+        }
+        // The vessel's actuator: the mission's when the beacon carries it
+        // as the wire rounds it.
+        let mission = &self.last.actuator;
+        let actuator = if wire::wire_actuator(mission.k, mission.beta) == (beacon.k, beacon.beta) {
+            *mission
+        } else {
+            ActuatorDocument {
+                k: beacon.k,
+                beta: beacon.beta,
+            }
+        };
+        match register(self.app, &id, actuator, pose).await {
+            Some(h) => {
+                self.heard.insert(id, h);
+            }
+            None => {
+                self.refused.insert(id, (beacon.k, beacon.beta));
+            }
+        }
     }
-    let _ = session.close().await;
-    Ok(())
+
+    /// Asks the fleet for its mission after a beacon on revision `held`
+    /// made this member unsure of its own; `false` when the beacon should
+    /// be dropped (the fleet's newer mission could not be taken).
+    async fn reconcile(&mut self, held: u32) -> bool {
+        self.asked = Some(tokio::time::Instant::now());
+        let doc = fleet_mission(self.session, self.keys).await;
+        self.settled |= doc.is_some();
+        let (revision, last) = (self.revision, &self.last);
+        // Another member made it, or the first query missed it: take it,
+        // as on joining.
+        let differs = |d: &PeerMissionDocument| {
+            d.revision > revision || (d.revision == revision && d.mission != *last)
+        };
+        match doc {
+            Some(doc) if differs(&doc) && !self.replace => {
+                if let Err(e) = adopt(self.app, &doc).await {
+                    tracing::warn!(error = %e, "the fleet's newer mission was not taken");
+                    return false;
+                }
+                self.revision = doc.revision;
+                self.last = self.app.snapshot.borrow().document.mission.clone();
+                *self.published.lock().expect("mission lock") =
+                    Arc::new(serde_json::to_vec(&doc).expect("documents serialize"));
+                metrics::gauge!(PEER_REVISION).set(self.revision as f64);
+                // The adopted mission's snapshot is not a write.
+                self.snapshots.borrow_and_update();
+            }
+            d if self.replace && (held > revision || d.as_ref().is_some_and(differs)) => {
+                self.revision = held.max(d.map_or(0, |d| d.revision)) + 1;
+                let json = ours(self.revision, &self.last, "--replace-fleet-mission");
+                self.publish(json).await;
+                tracing::info!(
+                    revision = self.revision,
+                    "the fleet had a newer revision: the mission published again above it \
+                     (--replace-fleet-mission)"
+                );
+            }
+            // Not found yet: asked again at the next beacon.
+            _ => {}
+        }
+        true
+    }
+
+    /// A vessel's liveliness token went: it leaves as a closed link does.
+    async fn on_gone(&mut self, id: String) {
+        self.refused.remove(&id);
+        if let Some(h) = self.heard.remove(&id) {
+            let _ = self
+                .app
+                .requests
+                .send(Request::Gone { id, link: h.link })
+                .await;
+        }
+    }
 }
 
 /// Registers a vessel heard on the fleet with the tick task, its link

@@ -14,14 +14,14 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use super::run::fleet_at;
-use super::{Config, Run, SimError};
+use super::{Config, Run, SimError, Tick, VesselSample};
 use crate::coverage::{Options, evaluate};
 use crate::geometry::Point;
 use crate::mission::scenario::{LocalScenario, evaluation_document};
 use crate::mission::{guidance_document, safety_document};
 use crate::protocol::{
-    ActuatorDocument, CommandDocument, CoverageDocument, MissionDocument, PoseDocument,
-    RiskDocument, Snapshot, SnapshotDocument, VesselStatusDocument,
+    ActuatorDocument, CellDocument, CommandDocument, CoverageDocument, MissionDocument,
+    PoseDocument, RiskDocument, Snapshot, SnapshotDocument, VesselStatusDocument,
 };
 use crate::recorder::messages::SimVesselRecord;
 use crate::recorder::{Entry, Recorder, RecorderConfig, Target};
@@ -48,7 +48,20 @@ pub fn record(
         },
         true,
     );
-    let ids = &config.scenario.ids;
+    let mission = mission_of(config, doc);
+    recorder.mission(0.0, mission.clone());
+    for (k, tick) in run.ticks.iter().enumerate() {
+        if let Some(snapshot) = record_tick(&recorder, config, &mission, k, tick) {
+            recorder.record(Entry::Tick(Arc::new(snapshot)));
+        }
+    }
+    recorder.finish();
+    thread.join();
+    Ok(path.to_path_buf())
+}
+
+/// The mission a coordinator would have recorded for `config`.
+fn mission_of(config: &Config, doc: &LocalScenario) -> MissionDocument {
     let first = config.scenario.fleet.vessels()[0];
     let mut risk = doc.risk.clone().unwrap_or(RiskDocument {
         base: 0.0,
@@ -57,7 +70,7 @@ pub fn record(
     for (i, o) in risk.objects.iter_mut().enumerate() {
         o.id.get_or_insert_with(|| format!("object-{}", i + 1));
     }
-    let mission = MissionDocument {
+    MissionDocument {
         // A geo-referenced scenario gives Foxglove's map channels too.
         origin: doc.origin,
         region: doc
@@ -72,107 +85,123 @@ pub fn record(
         guidance: guidance_document(&config.guidance),
         tick_hz: config.tick_hz,
         safety: safety_document(&config.safety),
-    };
-    recorder.mission(0.0, mission.clone());
-    let options = Options::default();
-    for (k, tick) in run.ticks.iter().enumerate() {
-        let positions = tick.vessels.iter().map(|v| Point {
-            x: v.state.x,
-            y: v.state.y,
-        });
-        let Some(fleet) = fleet_at(config, positions) else {
-            continue;
-        };
-        let evaluation = evaluate(
-            &config.scenario.region,
-            &config.scenario.risk,
-            &fleet,
-            &options,
-        );
-        let cells = evaluation_document(&config.scenario.region, ids, &evaluation).cells;
-        let mut vessels = Vec::with_capacity(ids.len());
-        for (((id, v), cell), own) in ids
-            .iter()
-            .zip(&tick.vessels)
-            .zip(&cells)
-            .zip(fleet.vessels())
-        {
-            let s = v.state;
-            let pose = PoseDocument {
-                t: tick.t,
-                x: s.x,
-                y: s.y,
-                psi: s.psi,
-                u: s.vel.x,
-                v: s.vel.y,
-                r: s.vel.z,
-                controlled: None,
-                telemetry: None,
-                fix: None,
-            };
-            recorder.record(Entry::Pose {
-                vessel: Arc::from(id.as_str()),
-                time: tick.t,
-                pose: Box::new(pose.clone()),
-            });
-            recorder.record(Entry::SimVessel(Box::new(SimVesselRecord {
-                vessel: id.clone(),
-                time: tick.t,
-                truth: [s.x, s.y, s.psi, s.vel.x, s.vel.y, s.vel.z],
-                disturbance: [v.tau_d.x, v.tau_d.y, v.tau_d.z],
-                estimate: [v.estimate.x, v.estimate.y, v.estimate.z],
-            })));
-            let c = v.command;
-            vessels.push(VesselStatusDocument {
-                id: id.clone(),
-                connected: true,
-                live: true,
-                controlled: true,
-                pose: Some(pose),
-                // Each vessel's own: a mixed fleet's β differ.
-                actuator: ActuatorDocument {
-                    k: own.k,
-                    beta: own.beta,
-                },
-                polygon: cell.polygon.clone(),
-                edges: cell.edges.clone(),
-                mass: cell.mass,
-                centroid: Some(cell.centroid),
-                last_command: Some(CommandDocument {
-                    tick: k as u64,
-                    u_d: c.u_d,
-                    r_d: c.r_d,
-                    u_d_dot: c.u_d_dot,
-                    r_d_dot: c.r_d_dot,
-                    centroid: [v.centroid.x, v.centroid.y],
-                    e: c.e,
-                    psi_e: c.psi_e,
-                    hold: None,
-                    station: None,
-                }),
-                last_seen: Some(tick.t),
-                neighbours: None,
-                quarantine: None,
-            });
-        }
-        let snapshot = Snapshot {
-            document: SnapshotDocument {
-                tick: k as u64,
-                time: tick.t,
-                h: tick.h,
-                mission: mission.clone(),
-                vessels,
-            },
-            coverage: CoverageDocument {
-                tick: k as u64,
-                time: tick.t,
-                h: tick.h,
-                cells,
-            },
-        };
-        recorder.record(Entry::Tick(Arc::new(snapshot)));
     }
-    recorder.finish();
-    thread.join();
-    Ok(path.to_path_buf())
+}
+
+/// Records tick `k`'s poses and simulator truths, and returns its
+/// snapshot (the partition evaluated again); `None` for a fleet that
+/// cannot be evaluated.
+fn record_tick(
+    recorder: &Recorder,
+    config: &Config,
+    mission: &MissionDocument,
+    k: usize,
+    tick: &Tick,
+) -> Option<Snapshot> {
+    let ids = &config.scenario.ids;
+    let positions = tick.vessels.iter().map(|v| Point {
+        x: v.state.x,
+        y: v.state.y,
+    });
+    let fleet = fleet_at(config, positions)?;
+    let evaluation = evaluate(
+        &config.scenario.region,
+        &config.scenario.risk,
+        &fleet,
+        &Options::default(),
+    );
+    let cells = evaluation_document(&config.scenario.region, ids, &evaluation).cells;
+    let mut vessels = Vec::with_capacity(ids.len());
+    for (((id, v), cell), own) in ids
+        .iter()
+        .zip(&tick.vessels)
+        .zip(&cells)
+        .zip(fleet.vessels())
+    {
+        let s = v.state;
+        let pose = PoseDocument {
+            t: tick.t,
+            x: s.x,
+            y: s.y,
+            psi: s.psi,
+            u: s.vel.x,
+            v: s.vel.y,
+            r: s.vel.z,
+            controlled: None,
+            telemetry: None,
+            fix: None,
+        };
+        recorder.record(Entry::Pose {
+            vessel: Arc::from(id.as_str()),
+            time: tick.t,
+            pose: Box::new(pose.clone()),
+        });
+        recorder.record(Entry::SimVessel(Box::new(SimVesselRecord {
+            vessel: id.clone(),
+            time: tick.t,
+            truth: [s.x, s.y, s.psi, s.vel.x, s.vel.y, s.vel.z],
+            disturbance: [v.tau_d.x, v.tau_d.y, v.tau_d.z],
+            estimate: [v.estimate.x, v.estimate.y, v.estimate.z],
+        })));
+        // Each vessel's own actuator: a mixed fleet's β differ.
+        let actuator = ActuatorDocument {
+            k: own.k,
+            beta: own.beta,
+        };
+        vessels.push(status(id, k, v, pose, actuator, cell));
+    }
+    Some(Snapshot {
+        document: SnapshotDocument {
+            tick: k as u64,
+            time: tick.t,
+            h: tick.h,
+            mission: mission.clone(),
+            vessels,
+        },
+        coverage: CoverageDocument {
+            tick: k as u64,
+            time: tick.t,
+            h: tick.h,
+            cells,
+        },
+    })
+}
+
+/// A simulated vessel's status at tick `k`, as a coordinator shows it.
+fn status(
+    id: &str,
+    k: usize,
+    v: &VesselSample,
+    pose: PoseDocument,
+    actuator: ActuatorDocument,
+    cell: &CellDocument,
+) -> VesselStatusDocument {
+    let c = v.command;
+    VesselStatusDocument {
+        id: id.to_string(),
+        connected: true,
+        live: true,
+        controlled: true,
+        last_seen: Some(pose.t),
+        pose: Some(pose),
+        actuator,
+        polygon: cell.polygon.clone(),
+        edges: cell.edges.clone(),
+        mass: cell.mass,
+        centroid: Some(cell.centroid),
+        last_command: Some(CommandDocument {
+            tick: k as u64,
+            u_d: c.u_d,
+            r_d: c.r_d,
+            u_d_dot: c.u_d_dot,
+            r_d_dot: c.r_d_dot,
+            centroid: [v.centroid.x, v.centroid.y],
+            e: c.e,
+            psi_e: c.psi_e,
+            hold: None,
+            station: None,
+        }),
+        neighbours: None,
+        quarantine: None,
+    }
 }

@@ -89,49 +89,7 @@ pub(super) fn fleet_at(config: &Config, positions: impl Iterator<Item = Point>) 
 /// Runs the closed loop. `progress` is called with the fraction done.
 pub fn run(config: &Config, mut progress: impl FnMut(f64)) -> Result<Run, SimError> {
     let n = config.scenario.fleet.len();
-    let region = &config.scenario.region;
-    let risk = &config.scenario.risk;
-    let options = Options::default();
-    let disturbances: Vec<Disturbance> = (0..n)
-        .map(|i| config.disturbance.model(i, config.seed))
-        .collect();
-    // Paper Assumption 2: b₂ must exceed |τ̇_d|, which for a force fixed in
-    // the earth frame grows with the turn rate the guidance may ask for.
-    let rate = disturbances
-        .iter()
-        .map(|d| d.rate_bound(config.guidance.max_yaw_rate).amax())
-        .fold(0.0, f64::max);
-    let observer_gains = if ObserverGains::for_rate(rate).b2 > config.observer.b2 {
-        ObserverGains::for_rate(rate)
-    } else {
-        config.observer
-    };
-    let mut states: Vec<State> = config
-        .scenario
-        .fleet
-        .vessels()
-        .iter()
-        .zip(&config.headings)
-        .map(|(v, &psi)| State {
-            x: v.position.x,
-            y: v.position.y,
-            psi,
-            vel: Vec3::zeros(),
-        })
-        .collect();
-    let mut observers: Vec<Observer> = (0..n)
-        .map(|_| Observer::new(config.vessel, observer_gains))
-        .collect();
-    // Each simulated vessel declares what its governor can follow, as the
-    // networked one does in its hello.
-    let mut guidance: Vec<Guidance> = (0..n)
-        .map(|_| {
-            let mut g = Guidance::new(config.guidance);
-            g.agility = agility(&config.vessel);
-            g
-        })
-        .collect();
-    let layer = SafetyLayer::new(region, config.safety)
+    let layer = SafetyLayer::new(&config.scenario.region, config.safety)
         .map_err(|e| SimError::Scenario(crate::mission::scenario::ScenarioError::Input(e)))?;
     let mut monitor = Monitor::new(
         n,
@@ -140,21 +98,7 @@ pub fn run(config: &Config, mut progress: impl FnMut(f64)) -> Result<Run, SimErr
         config.safety.shore_distance,
         1.0 / config.tick_hz,
     );
-    let mut lines = vec![Line::HOLD; n];
-    let mut peaks = vec![Peaks::default(); n];
-    let mut governors: Vec<Governor> = states
-        .iter()
-        .map(|s| Governor::new(config.vessel, s.vel))
-        .collect();
-    let mut commands = vec![Command::default(); n];
-    let mut lloyd_positions: Vec<Point> = config
-        .scenario
-        .fleet
-        .vessels()
-        .iter()
-        .map(|v| v.position)
-        .collect();
-
+    let mut hulls = Hulls::new(config);
     let h = config.step;
     let steps = (config.duration / h).round() as usize;
     let per_tick = ((1.0 / config.tick_hz) / h).round().max(1.0) as usize;
@@ -170,47 +114,7 @@ pub fn run(config: &Config, mut progress: impl FnMut(f64)) -> Result<Run, SimErr
         // Every tick, and the final state even when the duration is not a
         // whole number of ticks.
         if k % per_tick == 0 || k == steps {
-            let diverged = states.iter().position(|s| {
-                !(s.x.is_finite() && s.y.is_finite()) || s.x.abs() > 1e6 || s.y.abs() > 1e6
-            });
-            if let Some(vessel) = diverged {
-                return Err(SimError::Diverged { vessel, t });
-            }
-            let fleet = fleet_at(config, states.iter().map(|s| Point { x: s.x, y: s.y }))
-                .ok_or(SimError::Diverged { vessel: 0, t })?;
-            let eval = evaluate(region, risk, &fleet, &options);
-            let lloyd_eval = if config.lloyd {
-                let lloyd_fleet = fleet_at(config, lloyd_positions.iter().copied())
-                    .ok_or(SimError::Diverged { vessel: 0, t })?;
-                Some(evaluate(region, risk, &lloyd_fleet, &options))
-            } else {
-                None
-            };
-
-            let safe = layer.commands(t, &states, &eval.cells, &mut guidance);
-            monitor.tick(&states, layer.shore(), safe.iter().map(|c| c.intervened));
-            let mut samples = Vec::with_capacity(n);
-            for i in 0..n {
-                let c = eval.cells[i].centroid;
-                commands[i] = safe[i].command;
-                lines[i] = Line {
-                    u_d: commands[i].u_d,
-                    r_d: commands[i].r_d,
-                    u_d_dot: commands[i].u_d_dot,
-                    r_d_dot: commands[i].r_d_dot,
-                };
-                samples.push(VesselSample {
-                    state: states[i],
-                    command: commands[i],
-                    centroid: c,
-                    goal: safe[i].goal,
-                    intervened: safe[i].intervened,
-                    tau_d: disturbances[i].value(t, states[i].psi),
-                    estimate: observers[i].estimate(),
-                    reference: governors[i].current(),
-                    peak_error: std::mem::take(&mut peaks[i]).error,
-                });
-            }
+            let (tick, eval) = hulls.tick(config, t, &layer, &mut monitor, per_tick as f64 * h)?;
             if let Some(pos) = pending_snapshots.iter().position(|&ts| ts <= t + 1e-9) {
                 pending_snapshots.remove(pos);
                 snapshots.push(Snapshot {
@@ -218,58 +122,15 @@ pub fn run(config: &Config, mut progress: impl FnMut(f64)) -> Result<Run, SimErr
                     cells: eval.cells.iter().map(|c| c.geometry.clone()).collect(),
                 });
             }
-            ticks.push(Tick {
-                t,
-                h: eval.h,
-                lloyd_h: lloyd_eval.as_ref().map_or(f64::NAN, |e| e.h),
-                vessels: samples,
-                lloyd_positions: lloyd_positions.clone(),
-            });
-            if let Some(lloyd_eval) = lloyd_eval {
-                let centroids: Vec<Point> = lloyd_eval.cells.iter().map(|c| c.centroid).collect();
-                lloyd::step(
-                    &mut lloyd_positions,
-                    &centroids,
-                    config.lloyd_gain,
-                    per_tick as f64 * h,
-                );
-            }
+            ticks.push(tick);
             progress(t / config.duration);
         }
         if k == steps {
             break;
         }
-        for i in 0..n {
-            let s = states[i];
-            observers[i].measure(s.vel, h);
-            let est = observers[i].estimate();
-            let truth = disturbances[i].value(t, s.psi);
-            if t >= 10.0 {
-                measures.observer_error_max_after_10s = measures
-                    .observer_error_max_after_10s
-                    .max((est - truth).amax());
-            }
-            if (est - truth).amax() > 0.05 {
-                measures.t1_observer = t;
-            }
-            // Between ticks the command is a line along its rates; the
-            // governor gives the controller what of it the hull can follow.
-            let since = (k % per_tick) as f64 * h;
-            let line = lines[i].at(since);
-            let reference = governors[i].step(&line, s.vel, est, h);
-            peaks[i].record(s.vel, &line, &reference);
-            if t >= 20.0 {
-                late.record(s.vel, &line, &reference);
-            }
-            let (tu, tr) = control(&config.vessel, &config.controller, s.vel, &reference, est);
-            let dist = &disturbances[i];
-            let (next, applied) = step(&config.vessel, &s, tu, tr, t, h, |t, st| {
-                dist.value(t, st.psi)
-            });
-            observers[i].actuate(Vec3::new(applied.0, 0.0, applied.1));
-            states[i] = next;
-        }
-        monitor.step(&states, layer.shore());
+        let since = (k % per_tick) as f64 * h;
+        hulls.step(config, t, since, &mut measures, &mut late);
+        monitor.step(&hulls.states, layer.shore());
     }
     measures.u_error_max_after_20s = late.error.0.abs();
     measures.r_error_max_after_20s = late.error.1.abs();
@@ -281,4 +142,191 @@ pub fn run(config: &Config, mut progress: impl FnMut(f64)) -> Result<Run, SimErr
         measures,
         safety: monitor.record,
     })
+}
+
+/// Every vessel's hull, observer, guidance and governor between steps,
+/// and Lloyd's fleet beside them.
+struct Hulls {
+    states: Vec<State>,
+    disturbances: Vec<Disturbance>,
+    observers: Vec<Observer>,
+    guidance: Vec<Guidance>,
+    governors: Vec<Governor>,
+    /// Each vessel's command line since the last tick.
+    lines: Vec<Line>,
+    /// Each vessel's tracking peaks since the last tick.
+    peaks: Vec<Peaks>,
+    lloyd_positions: Vec<Point>,
+}
+
+impl Hulls {
+    fn new(config: &Config) -> Hulls {
+        let n = config.scenario.fleet.len();
+        let disturbances: Vec<Disturbance> = (0..n)
+            .map(|i| config.disturbance.model(i, config.seed))
+            .collect();
+        // Paper Assumption 2: b₂ must exceed |τ̇_d|, which for a force fixed
+        // in the earth frame grows with the turn rate the guidance may ask
+        // for.
+        let rate = disturbances
+            .iter()
+            .map(|d| d.rate_bound(config.guidance.max_yaw_rate).amax())
+            .fold(0.0, f64::max);
+        let observer_gains = if ObserverGains::for_rate(rate).b2 > config.observer.b2 {
+            ObserverGains::for_rate(rate)
+        } else {
+            config.observer
+        };
+        let vessels = config.scenario.fleet.vessels();
+        let states: Vec<State> = vessels
+            .iter()
+            .zip(&config.headings)
+            .map(|(v, &psi)| State {
+                x: v.position.x,
+                y: v.position.y,
+                psi,
+                vel: Vec3::zeros(),
+            })
+            .collect();
+        Hulls {
+            observers: (0..n)
+                .map(|_| Observer::new(config.vessel, observer_gains))
+                .collect(),
+            // Each simulated vessel declares what its governor can follow,
+            // as the networked one does in its hello.
+            guidance: (0..n)
+                .map(|_| {
+                    let mut g = Guidance::new(config.guidance);
+                    g.agility = agility(&config.vessel);
+                    g
+                })
+                .collect(),
+            governors: states
+                .iter()
+                .map(|s| Governor::new(config.vessel, s.vel))
+                .collect(),
+            lines: vec![Line::HOLD; n],
+            peaks: vec![Peaks::default(); n],
+            lloyd_positions: vessels.iter().map(|v| v.position).collect(),
+            states,
+            disturbances,
+        }
+    }
+
+    /// A tick at `t`: the partition, every vessel's command through the
+    /// safety layer, what the tick records, and Lloyd's step over `period`.
+    fn tick(
+        &mut self,
+        config: &Config,
+        t: f64,
+        layer: &SafetyLayer,
+        monitor: &mut Monitor,
+        period: f64,
+    ) -> Result<(Tick, crate::coverage::Evaluation), SimError> {
+        let (region, risk) = (&config.scenario.region, &config.scenario.risk);
+        let options = Options::default();
+        let diverged = self.states.iter().position(|s| {
+            !(s.x.is_finite() && s.y.is_finite()) || s.x.abs() > 1e6 || s.y.abs() > 1e6
+        });
+        if let Some(vessel) = diverged {
+            return Err(SimError::Diverged { vessel, t });
+        }
+        let fleet = fleet_at(config, self.states.iter().map(|s| Point { x: s.x, y: s.y }))
+            .ok_or(SimError::Diverged { vessel: 0, t })?;
+        let eval = evaluate(region, risk, &fleet, &options);
+        let lloyd_eval = if config.lloyd {
+            let lloyd_fleet = fleet_at(config, self.lloyd_positions.iter().copied())
+                .ok_or(SimError::Diverged { vessel: 0, t })?;
+            Some(evaluate(region, risk, &lloyd_fleet, &options))
+        } else {
+            None
+        };
+
+        let safe = layer.commands(t, &self.states, &eval.cells, &mut self.guidance);
+        monitor.tick(
+            &self.states,
+            layer.shore(),
+            safe.iter().map(|c| c.intervened),
+        );
+        let mut samples = Vec::with_capacity(self.states.len());
+        for (i, safe) in safe.iter().enumerate() {
+            let command = safe.command;
+            self.lines[i] = Line {
+                u_d: command.u_d,
+                r_d: command.r_d,
+                u_d_dot: command.u_d_dot,
+                r_d_dot: command.r_d_dot,
+            };
+            samples.push(VesselSample {
+                state: self.states[i],
+                command,
+                centroid: eval.cells[i].centroid,
+                goal: safe.goal,
+                intervened: safe.intervened,
+                tau_d: self.disturbances[i].value(t, self.states[i].psi),
+                estimate: self.observers[i].estimate(),
+                reference: self.governors[i].current(),
+                peak_error: std::mem::take(&mut self.peaks[i]).error,
+            });
+        }
+        let tick = Tick {
+            t,
+            h: eval.h,
+            lloyd_h: lloyd_eval.as_ref().map_or(f64::NAN, |e| e.h),
+            vessels: samples,
+            lloyd_positions: self.lloyd_positions.clone(),
+        };
+        if let Some(lloyd_eval) = lloyd_eval {
+            let centroids: Vec<Point> = lloyd_eval.cells.iter().map(|c| c.centroid).collect();
+            lloyd::step(
+                &mut self.lloyd_positions,
+                &centroids,
+                config.lloyd_gain,
+                period,
+            );
+        }
+        Ok((tick, eval))
+    }
+
+    /// One dynamics step from `t`, `since` the last tick: each vessel's
+    /// observer, governor, controller and hull.
+    fn step(
+        &mut self,
+        config: &Config,
+        t: f64,
+        since: f64,
+        measures: &mut Measures,
+        late: &mut Peaks,
+    ) {
+        let h = config.step;
+        for i in 0..self.states.len() {
+            let s = self.states[i];
+            self.observers[i].measure(s.vel, h);
+            let est = self.observers[i].estimate();
+            let truth = self.disturbances[i].value(t, s.psi);
+            if t >= 10.0 {
+                measures.observer_error_max_after_10s = measures
+                    .observer_error_max_after_10s
+                    .max((est - truth).amax());
+            }
+            if (est - truth).amax() > 0.05 {
+                measures.t1_observer = t;
+            }
+            // Between ticks the command is a line along its rates; the
+            // governor gives the controller what of it the hull can follow.
+            let line = self.lines[i].at(since);
+            let reference = self.governors[i].step(&line, s.vel, est, h);
+            self.peaks[i].record(s.vel, &line, &reference);
+            if t >= 20.0 {
+                late.record(s.vel, &line, &reference);
+            }
+            let (tu, tr) = control(&config.vessel, &config.controller, s.vel, &reference, est);
+            let dist = &self.disturbances[i];
+            let (next, applied) = step(&config.vessel, &s, tu, tr, t, h, |t, st| {
+                dist.value(t, st.psi)
+            });
+            self.observers[i].actuate(Vec3::new(applied.0, 0.0, applied.1));
+            self.states[i] = next;
+        }
+    }
 }

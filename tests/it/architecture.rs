@@ -8,7 +8,7 @@
 //! `self::…` path (in `use` trees, expressions and doc links) and every path
 //! through a child module a file declares is resolved in the module tree
 //! to the file that defines the item, following `pub use` re-exports, so
-//! `crate::mission::MissionError` is an edge to `src/mission/error.rs`. A
+//! `crate::mission::MissionError` is an edge to `crates/mission/src/error.rs`. A
 //! re-export itself is the module's public face, not a dependency of its
 //! code, and makes no edge. `cargo test --test it architecture -- --nocapture`
 //! prints the modules' dependency graph.

@@ -40,5 +40,6 @@ mod shutdown;
 mod sim;
 mod sitl_script;
 mod soak;
+mod tidy;
 mod tracking;
 mod valid_inputs;

@@ -95,7 +95,7 @@ fn a_no_coordinator_eight_vessels_reach_the_centralized_optimum() {
 /// f. A member whose clock is 2 s ahead (usv-3, its wall clock moved by
 /// libfaketime, its monotonic clock left alone): its beacons carry times
 /// 2 s ahead of their arrival, which the others' tables clamp to the
-/// transit bound (src/agent/peer/table.rs), so nobody refuses it and the
+/// transit bound (src/agent/peer/table/mod.rs), so nobody refuses it and the
 /// fleet converges as test a's does: E_max < 0.5 m, H within 0.5 % of the
 /// centralized run's, never two vessels within the safety distance, and
 /// usv-3 fresh in every other vessel's partition at the end.

@@ -36,7 +36,7 @@
 //! accuracy. The exponentials are computed inline (`exp_fast`,
 //! `exp_m1_fast`: within 4 ulp), twelve at a time in vector registers.
 //!
-//! Against the rule before 2026-11-26 (folded edges, pieces of 2/(a u),
+//! Against the plainer rule of `previous_edge` (folded edges, pieces of 2/(a u),
 //! the library's `exp` and `exp_m1`, about 40 % more nodes): edges agree to
 //! 2e-14 of their own size and whole cells to 6e-15 (unit tests below);
 //! on `examples/fleet-1000.json` the masses to 7e-16 and H to the bit.
@@ -374,7 +374,7 @@ pub(super) mod tests {
         }
     }
 
-    /// The edge rule this module used up to 2026-11 (pieces of 2/(a u), the
+    /// A plainer edge rule (pieces of 2/(a u), the
     /// fold at the foot of the perpendicular, the library's exp and exp_m1),
     /// kept as the reference for the present one. `stable_tail` writes its
     /// closed-form tail as the present rule does (as it was, the difference

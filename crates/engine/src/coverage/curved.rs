@@ -30,9 +30,9 @@
 //! engine's tests bound at 1e-10 relative. Against a finer rule (2 instead
 //! of 3 decay lengths) the integrals agree to 3.2e-13 of their size (the
 //! tests), and against the independent slab reference of
-//! `curved_reference` to 1.5e-12. (Until 2026-11-26 pieces were at most
-//! 2/√a long and 3/(a r): since r ≥ D |sin φ|, far stricter where a
-//! narrow Gaussian sees a small circle from afar.)
+//! `curved_reference` to 1.5e-12. (Pieces of at most 2/√a and 3/(a r)
+//! would be far stricter, since r ≥ D |sin φ|, where a narrow Gaussian
+//! sees a small circle from afar.)
 //! Where r² stays beyond the cutoff over a piece (`skip_angle` proposes
 //! how far, from the circle's geometry), the near form's integrals are
 //! closed: the angle the piece turns about m, over 2a, and −∫ n ds; the
@@ -351,7 +351,7 @@ fn arc(c: Point, radius: f64, start: f64, sweep: f64, form: &Form) -> (f64, Poin
         // 2/√(aRD), and no longer than 3/(aRD |sin φ|), over which it
         // changes by 6 — the straight edges' 2/√a and 3/(a u) with u the
         // distance from the foot, since D |sin φ| = |y·u⊥| plays u's part.
-        // The rule before 2026-11-26, 2/(R√a) and 3/(a r R), was far
+        // The rule 2/(R√a) and 3/(a r R) would be far
         // stricter (r ≥ D |sin φ|) where a narrow Gaussian sees a small
         // circle from afar: millions of pieces of 1e-12 rad (the floor)
         // on one arc.

@@ -286,14 +286,14 @@ fn curved_cells_tile_the_region_and_match_an_independent_reference() {
     assert!(worst_centroid < 1e-4, "centroid {worst_centroid:e} m");
 }
 
-/// The fuzzer's second timeout (2026-11-25): a disc of radius 45 km at a
+/// A fuzzer's timeout: a disc of radius 45 km at a
 /// corner of a triangle of 10 000 km, and a Gaussian of σ = 1 mm 7 000 km
 /// away, 1 m inside the triangle's long edge. Its arc approaches the point
 /// nearest the Gaussian almost tangentially, where the former skip crept
 /// in steps ∝ angle² (hundreds of millions of them). And a disc of 50 m
 /// 100 km from the same Gaussian, whose former pieces of 3/(a r R) rad
 /// were 1e-12 rad along the 9e-6 rad that matter (seven million). And
-/// the fuzzer's third and fourth (2026-11-26): a 32 km disc whose corner
+/// two more of its timeouts: a 32 km disc whose corner
 /// is nearest the Gaussian, 5e6 m away, where steps of 1e-12 rad moved
 /// the arc by less than its coordinates' resolution and r² never rose
 /// past the cutoff; and a disc whose nearest point lies by its arc's end, where
@@ -359,7 +359,7 @@ fn a_narrow_gaussian_far_from_a_disc_takes_few_pieces() {
     assert!(took < 1.0, "{took:.2} s");
 }
 
-/// The fuzzer's crash (2026-11-26): a vessel of β = 1.7e-100, whose
+/// A fuzzer's crash: a vessel of β = 1.7e-100, whose
 /// actuator is flat, beside one of β = 0.001 and the same k, which wins
 /// a disc of radius 3e-47 m. That arc's pieces' floor, 1e-12 (1 + r/R)
 /// rad, passed π/4 (past the half-angle the nodes' sine polynomial is
