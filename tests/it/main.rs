@@ -18,6 +18,7 @@ mod cli;
 mod curved;
 mod dashboard;
 mod dashboard_ux;
+mod docs_numbers;
 mod engine;
 mod faults;
 mod first_hour;
