@@ -5,7 +5,7 @@
 // page offers no editing and shows the replay bar (replay.js).
 
 import { write, read, askToken, token, showError } from "./api.js";
-import { MapView, ramp } from "./map.js";
+import { MapView, inRegion, ramp } from "./map.js";
 import { Series, drawChart } from "./charts.js";
 import { GeoOverlay } from "./geo-overlay.js";
 import { startReplayBar } from "./replay.js";
@@ -79,7 +79,9 @@ async function loadHistory() {
     return;
   }
   if (load !== state.historyLoads) return; // a newer load is on its way
-  state.h.prepend(history.samples.map((s) => [s.time, s.H]));
+  // A tick without a partition (no vessel yet) has H = 0, which is no
+  // coverage to chart: it would stretch the axis down to zero.
+  state.h.prepend(history.samples.filter((s) => s.H > 0).map((s) => [s.time, s.H]));
   drawCharts();
 }
 
@@ -138,7 +140,8 @@ function onSnapshot(snap) {
   // A snapshot the history already holds (sent before it was read) is not
   // charted twice.
   const last = state.h.last();
-  if (!last || snap.time > last[0]) state.h.push(snap.time, snap.H);
+  if ((!last || snap.time > last[0]) && snap.H > 0) state.h.push(snap.time, snap.H);
+  if (window.seacover.replay) window.seacover.replay.shown(snap.time);
   const live = snap.vessels.filter((v) => v.live).length;
   $("summary").textContent =
     `t = ${snap.time.toFixed(1)} s · H = ${snap.H.toFixed(1)} · ${live}/${snap.vessels.length} vessels live`;
@@ -168,11 +171,21 @@ function onSnapshot(snap) {
 
 // ---- vessel table -------------------------------------------------------------
 
+/**
+ * How long a vessel whose link closed stays in the table [mission s]: the
+ * coordinator keeps its entry (GET /api/v1/vessels lists it, DELETE forgets
+ * it), but a table of every boat that ever connected helps nobody.
+ */
+const GONE_AFTER = 60;
+
 function drawTable(snap) {
   const body = $("vessels").tBodies[0];
+  const vessels = snap.vessels.filter(
+    (v) => v.connected || (v.last_seen != null && snap.time - v.last_seen <= GONE_AFTER),
+  );
   // A peer fleet (serve --peer) has one more column: each vessel's own
   // neighbour count, as it reports it.
-  const peer = snap.vessels.some((v) => v.neighbours != null);
+  const peer = vessels.some((v) => v.neighbours != null);
   const head = $("vessels").tHead.rows[0];
   if ((head.cells.length > 5) !== peer) {
     if (peer) {
@@ -185,18 +198,18 @@ function drawTable(snap) {
       head.deleteCell(5);
     }
   }
-  const ids = snap.vessels.map((v) => v.id).join("\n") + (peer ? "\npeer" : "");
+  const ids = vessels.map((v) => v.id).join("\n") + (peer ? "\npeer" : "");
   // Rows are rebuilt only when the fleet changes; otherwise their cells are
   // updated in place, so a row under the pointer stays the same element.
   if (body.dataset.ids !== ids) {
     body.dataset.ids = ids;
-    body.innerHTML = snap.vessels
+    body.innerHTML = vessels
       .map((v) => `<tr data-vessel-id="${escape(v.id)}"><td>${escape(v.id)}</td><td></td>`
         + '<td class="num"></td><td class="num"></td><td class="num"></td>'
         + (peer ? '<td class="num"></td>' : "") + "</tr>")
       .join("");
   }
-  snap.vessels.forEach((v, i) => {
+  vessels.forEach((v, i) => {
     const row = body.rows[i];
     const cells = row.cells;
     // A quarantined vessel (its poses refused) is out of the partition and
@@ -216,7 +229,8 @@ function drawTable(snap) {
     if (peer) cells[5].textContent = v.neighbours == null ? "–" : String(v.neighbours);
     row.classList.toggle("selected", v.id === state.selectedVessel);
   });
-  $("vessel-count").textContent = `(${snap.vessels.length})`;
+  const gone = snap.vessels.length - vessels.length;
+  $("vessel-count").textContent = `(${vessels.length}${gone ? ` · ${gone} gone` : ""})`;
 }
 
 /** The link cell: its state, and an operator's badge; rebuilt on change only. */
@@ -274,8 +288,11 @@ function selectVessel(id) {
 function drawCharts() {
   drawChart($("chart-h"), state.h, ["H(P)"], ["#4fb3ff"]);
   if (state.selectedVessel) {
-    drawChart($("chart-u"), state.vesselSeries.u, ["u", "u_d"], ["#7be07b", "#ffb84f"]);
-    drawChart($("chart-r"), state.vesselSeries.r, ["r", "r_d"], ["#7be07b", "#ffb84f"]);
+    // The command dashed and under what the hull did, which stays in view
+    // where it follows the command exactly.
+    const commanded = [[], [5, 4]];
+    drawChart($("chart-u"), state.vesselSeries.u, ["u", "u_d"], ["#7be07b", "#ffb84f"], commanded);
+    drawChart($("chart-r"), state.vesselSeries.r, ["r", "r_d"], ["#7be07b", "#ffb84f"], commanded);
     drawChart($("chart-obs"), state.vesselSeries.obs, ["‖τ_d − τ̂_d‖"], ["#ff7bd5"]);
   }
 }
@@ -463,7 +480,8 @@ function release(event) {
     moveObject(p.object, wx, wy);
   } else if (p.object) {
     selectObject(p.object);
-  } else if (!p.moved && !REPLAY) {
+  } else if (!p.moved && !REPLAY && inRegion(state.snapshot.mission.region, wx, wy)) {
+    // Risk lies on the water of Q: a click on land or outside adds nothing.
     addObject(wx, wy);
   }
 }

@@ -46,10 +46,11 @@ export class Series {
 }
 
 /**
- * Draws `series` on `canvas`: one line per value column, with `labels` and
- * `colours` for each.
+ * Draws `series` on `canvas`: one line per value column, with `labels`,
+ * `colours` and line `dashes` (none by default) for each. The first column
+ * is drawn last, on top.
  */
-export function drawChart(canvas, series, labels, colours) {
+export function drawChart(canvas, series, labels, colours, dashes = []) {
   const r = canvas.getBoundingClientRect();
   const dpr = window.devicePixelRatio || 1;
   const w = Math.max(1, r.width);
@@ -100,9 +101,10 @@ export function drawChart(canvas, series, labels, colours) {
   ctx.fillText(fmt(lo, hi - lo), 2, h - bottom);
   ctx.fillText(`${t0.toFixed(0)} s`, left, h - 2);
   ctx.fillText(`${t1.toFixed(0)} s`, w - right - 34, h - 2);
-  for (let k = 1; k < pts[0].length; k++) {
+  for (let k = pts[0].length - 1; k >= 1; k--) {
     ctx.strokeStyle = colours[k - 1];
     ctx.lineWidth = 1.4;
+    ctx.setLineDash(dashes[k - 1] || []);
     ctx.beginPath();
     let started = false;
     for (const p of pts) {
@@ -112,6 +114,7 @@ export function drawChart(canvas, series, labels, colours) {
       started = true;
     }
     ctx.stroke();
+    ctx.setLineDash([]);
     ctx.fillStyle = colours[k - 1];
     ctx.fillText(labels[k - 1], left + 6 + (k - 1) * 70, top - 3);
   }

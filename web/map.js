@@ -15,6 +15,22 @@ export function colourOf(index) {
   return `hsl(${(index * 137.508) % 360} 70% 62%)`;
 }
 
+/** Whether (x, y) lies in `ring`, a closed polygon's vertices (even-odd). */
+function inRing(ring, x, y) {
+  let inside = false;
+  for (let i = 0, j = ring.length - 1; i < ring.length; j = i++) {
+    const [xi, yi] = ring[i];
+    const [xj, yj] = ring[j];
+    if ((yi > y) !== (yj > y) && x < ((xj - xi) * (y - yi)) / (yj - yi) + xi) inside = !inside;
+  }
+  return inside;
+}
+
+/** Whether (x, y) is water of the task region Q: inside it, off its islands. */
+export function inRegion(region, x, y) {
+  return inRing(region.polygon, x, y) && !region.holes.some((hole) => inRing(hole, x, y));
+}
+
 /** Φ at (x, y): base plus Gaussian objects (paper eq. 5). */
 export function density(risk, x, y) {
   let phi = risk.base;
@@ -72,6 +88,9 @@ export class MapView {
     this.insets = () => ({ top: 0, bottom: 0 });
     this.mission = null;
     this.vessels = [];
+    // Each vessel's colour, by the order the page first saw it: a vessel
+    // that joins or leaves changes no other vessel's colour.
+    this.colours = new Map();
     this.trails = new Map();
     this.selectedObject = null;
     this.selectedVessel = null;
@@ -172,6 +191,12 @@ export class MapView {
     this.oy += dy;
     this.autoFit = false;
     this.dirty = true;
+  }
+
+  /** A vessel's colour on the map (and its trail's). */
+  colourFor(id) {
+    if (!this.colours.has(id)) this.colours.set(id, this.colours.size);
+    return colourOf(this.colours.get(id));
   }
 
   setSnapshot(snapshot) {
@@ -338,11 +363,10 @@ export class MapView {
     }
 
     // Cells, each in its vessel's colour.
-    const index = new Map(this.vessels.map((v, i) => [v.id, i]));
     ctx.lineWidth = 1;
     for (const v of this.vessels) {
       if (!v.polygon) continue;
-      const colour = colourOf(index.get(v.id));
+      const colour = this.colourFor(v.id);
       ctx.beginPath();
       // Curved cells (vessels with different β) with their true arcs, every
       // piece and hole; straight ones by their outline.
@@ -379,7 +403,7 @@ export class MapView {
     const many = this.vessels.length > 200;
     for (const v of this.vessels) {
       if (!v.pose) continue;
-      const colour = colourOf(index.get(v.id));
+      const colour = this.colourFor(v.id);
       const trail = this.trails.get(v.id);
       if (trail && trail.length > 1 && !many) {
         for (let k = 1; k < trail.length; k++) {

@@ -27,11 +27,16 @@ export async function startReplayBar({ seeking = () => {}, sought = () => {} } =
   slider.max = String(status.end);
   slider.step = "0.1";
   let dragging = false;
+  // The time of the snapshot on screen: the label and the slider say it,
+  // as the header does, rather than the replay clock polled between
+  // snapshots (which runs ahead of what is shown).
+  let shownTime = null;
 
   function show() {
+    const time = shownTime ?? status.time;
     $("replay-play").textContent = status.playing ? "pause" : "play";
-    if (!dragging) slider.value = String(status.time);
-    $("replay-label").textContent = `${status.time.toFixed(1)} / ${status.end.toFixed(1)} s`;
+    if (!dragging) slider.value = String(time);
+    $("replay-label").textContent = `${time.toFixed(1)} / ${status.end.toFixed(1)} s`;
     $("replay-speed").value = String(status.speed);
   }
 
@@ -49,6 +54,7 @@ export async function startReplayBar({ seeking = () => {}, sought = () => {} } =
   }
 
   async function seek(time) {
+    shownTime = null;
     seeking();
     const answer = await put({ time });
     sought();
@@ -77,5 +83,10 @@ export async function startReplayBar({ seeking = () => {}, sought = () => {} } =
     }
   }, 500);
   show();
-  return { seek, put, status: () => status };
+  /** The stream showed the snapshot of mission time `t`. */
+  function shown(t) {
+    shownTime = t;
+    show();
+  }
+  return { seek, put, shown, status: () => status };
 }

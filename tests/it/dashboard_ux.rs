@@ -204,7 +204,9 @@ async fn a_live_page_opened_mid_mission() {
         "[mode, badge state, badge, base form, token button, replay bar, read-only risk]"
     );
 
-    // H(P) from the mission's first tick, though the page opened 15 s in.
+    // H(P) from the mission's first partition (the first ticks, before any
+    // vessel, have H = 0: no coverage to chart), though the page opened
+    // 15 s in.
     until(
         &client,
         "the H history",
@@ -217,9 +219,10 @@ async fn a_live_page_opened_mid_mission() {
          return [p[0][0], p[0][1], p[p.length - 1][0], window.seacover.state.snapshot.time];",
     )
     .await;
+    let first = history.samples.iter().find(|s| s.h > 0.0).unwrap();
     assert_eq!(
         (h[0].as_f64().unwrap(), h[1].as_f64().unwrap()),
-        (start.time, start.h),
+        (first.time, first.h),
         "the H chart starts at {h}"
     );
     assert!(h[3].as_f64().unwrap() >= 15.0 && h[2].as_f64().unwrap() >= 15.0);
@@ -518,6 +521,33 @@ async fn a_replay_page_is_a_replay() {
         );
     }
     screenshot(&client, "ux-replay").await;
+
+    // Playing, the header and the replay bar say the same time at every
+    // moment: the snapshot's on screen.
+    let play = http
+        .put(format!("http://{addr}/api/v1/replay"))
+        .json(&json!({"playing": true}))
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(play.status(), 200);
+    let mut differ = Vec::new();
+    for _ in 0..12 {
+        tokio::time::sleep(Duration::from_millis(170)).await;
+        let texts = eval(
+            &client,
+            "return [document.getElementById('summary').textContent,
+                     document.getElementById('replay-label').textContent];",
+        )
+        .await;
+        let header = texts[0].as_str().unwrap();
+        let label = texts[1].as_str().unwrap();
+        let time = label.split(" / ").next().unwrap();
+        if !header.starts_with(&format!("t = {time} s")) {
+            differ.push(format!("{header:?} vs {label:?}"));
+        }
+    }
+    assert!(differ.is_empty(), "header vs replay bar: {differ:?}");
 
     assert_quiet(&client, port, true).await;
     client.close().await.unwrap();

@@ -17,6 +17,7 @@ mod ardupilot_sitl;
 mod cli;
 mod curved;
 mod dashboard;
+mod dashboard_fleet;
 mod dashboard_ux;
 mod docs_numbers;
 mod engine;
