@@ -438,18 +438,7 @@ impl Member<'_> {
             }
         };
         self.app.recorder.beacon(self.app.clock.now(), &beacon);
-        let pose = PoseDocument {
-            t: beacon.t,
-            x: beacon.x,
-            y: beacon.y,
-            psi: beacon.psi,
-            u: beacon.u,
-            v: beacon.v,
-            r: beacon.r,
-            controlled: Some(beacon.controlled),
-            telemetry: None,
-            fix: None,
-        };
+        let pose = beacon.pose();
         // A vessel works on a revision above ours (ours from before a
         // restart), or on any revision while ours is provisional (the same
         // number may be another mission): the fleet is asked, and what it

@@ -11,7 +11,7 @@
 //!
 //! A seek reads only what the moment needs through the recording's chunk
 //! index: the newest coverage and mission messages at or before it and the
-//! poses and commands of the [`LOOKBACK`] before it.
+//! poses, commands and peer beacons of the [`LOOKBACK`] before it.
 //!
 //! The H(P) history (`GET /api/v1/coverage/history`) is the coordinator's
 //! bounded [`History`] over the recording's coverage channel up to the
@@ -49,7 +49,9 @@ use crate::protocol::{
     Snapshot, SnapshotDocument, VesselStatusDocument,
 };
 use crate::recorder::Recorder;
-use crate::recorder::messages::{self, CommandRecord, CoverageRecord, MissionRecord, PoseRecord};
+use crate::recorder::messages::{
+    self, BeaconRecord, CommandRecord, CoverageRecord, MissionRecord, PoseRecord,
+};
 use crate::recorder::reader::{ReadError, Recording};
 
 /// How far back a moment's poses and commands are looked for [ns]: longer
@@ -125,14 +127,27 @@ pub fn snapshot_at(recording: &Recording, at: u64) -> Result<Option<Snapshot>, R
     let mission: MissionDocument = mission.mission;
     let mut poses: HashMap<String, PoseDocument> = HashMap::new();
     let mut commands: HashMap<String, CommandDocument> = HashMap::new();
-    let wanted = |t: &str| t == messages::POSE || t == messages::COMMAND;
+    // A peer fleet's member (`serve --peer`) records its vessels' beacons,
+    // not poses: each tells its vessel's pose.
+    let wanted =
+        |t: &str| t == messages::POSE || t == messages::COMMAND || t == messages::PEER_BEACON;
     for m in recording.window(at.saturating_sub(LOOKBACK), at, &wanted)? {
-        if &*m.topic == messages::POSE {
-            if let Ok(p) = serde_json::from_slice::<PoseRecord>(&m.data) {
-                poses.insert(p.vessel, p.pose);
+        match &*m.topic {
+            messages::POSE => {
+                if let Ok(p) = serde_json::from_slice::<PoseRecord>(&m.data) {
+                    poses.insert(p.vessel, p.pose);
+                }
             }
-        } else if let Ok(c) = serde_json::from_slice::<CommandRecord>(&m.data) {
-            commands.insert(c.vessel, c.command);
+            messages::PEER_BEACON => {
+                if let Ok(b) = serde_json::from_slice::<BeaconRecord>(&m.data) {
+                    poses.insert(b.beacon.id.clone(), b.beacon.pose());
+                }
+            }
+            _ => {
+                if let Ok(c) = serde_json::from_slice::<CommandRecord>(&m.data) {
+                    commands.insert(c.vessel, c.command);
+                }
+            }
         }
     }
     let cells: Vec<crate::protocol::CellDocument> =
@@ -465,4 +480,93 @@ async fn set(
         .await
         .map_err(|_| ApiError::ShuttingDown)?;
     rx.await.map_err(|_| ApiError::ShuttingDown)?.map(Json)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::protocol::peer::BeaconDocument;
+    use crate::recorder::{Entry, Recorder, RecorderConfig, Target};
+
+    /// A `serve --peer` recording holds beacons, not poses: the replay
+    /// shows each vessel where its last beacon put it.
+    #[test]
+    fn a_peer_members_recording_shows_its_boats() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("peer.mcap");
+        let (recorder, thread) = Recorder::start(
+            RecorderConfig {
+                target: Target::File(file.clone()),
+                wall_clock: false,
+            },
+            true,
+        );
+        let mission = crate::mission::Mission::from_text(crate::mission::PAPER_SCENARIO)
+            .unwrap()
+            .document();
+        recorder.mission(0.0, mission.clone());
+        let beacon = |id: &str, x: f64| BeaconDocument {
+            id: id.into(),
+            seq: 1,
+            t: 1.0,
+            x,
+            y: 20.0,
+            psi: 0.5,
+            u: 0.3,
+            v: 0.0,
+            r: 0.01,
+            k: 0.5,
+            beta: 0.001,
+            rev: 0,
+            controlled: true,
+        };
+        recorder.beacon(0.9, &beacon("usv-1", 10.0));
+        recorder.beacon(0.95, &beacon("usv-2", 30.0));
+        let status = |id: &str| VesselStatusDocument {
+            id: id.into(),
+            connected: true,
+            live: true,
+            controlled: true,
+            pose: None,
+            actuator: mission.actuator,
+            polygon: None,
+            edges: Vec::new(),
+            mass: 0.0,
+            centroid: None,
+            last_command: None,
+            last_seen: Some(0.95),
+            neighbours: None,
+            quarantine: None,
+        };
+        recorder.record(Entry::Tick(std::sync::Arc::new(Snapshot {
+            document: SnapshotDocument {
+                tick: 10,
+                time: 1.0,
+                h: 1.0,
+                mission: mission.clone(),
+                vessels: vec![status("usv-1"), status("usv-2")],
+            },
+            coverage: CoverageDocument {
+                tick: 10,
+                time: 1.0,
+                h: 1.0,
+                cells: Vec::new(),
+            },
+        })));
+        recorder.finish();
+        thread.join();
+
+        let recording = Recording::open(&file).unwrap();
+        let snapshot = snapshot_at(&recording, 1_000_000_000).unwrap().unwrap();
+        let poses: Vec<_> = snapshot
+            .document
+            .vessels
+            .iter()
+            .map(|v| (v.id.as_str(), v.pose.as_ref().map(|p| (p.x, p.y))))
+            .collect();
+        assert_eq!(
+            poses,
+            [("usv-1", Some((10.0, 20.0))), ("usv-2", Some((30.0, 20.0)))]
+        );
+    }
 }

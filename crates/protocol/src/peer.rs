@@ -55,6 +55,25 @@ pub struct BeaconDocument {
     pub controlled: bool,
 }
 
+impl BeaconDocument {
+    /// The pose the beacon tells, as a linked vessel reports one (`t` the
+    /// sender's clock; no telemetry or fix travels in a beacon).
+    pub fn pose(&self) -> crate::PoseDocument {
+        crate::PoseDocument {
+            t: self.t,
+            x: self.x,
+            y: self.y,
+            psi: self.psi,
+            u: self.u,
+            v: self.v,
+            r: self.r,
+            controlled: Some(self.controlled),
+            telemetry: None,
+            fix: None,
+        }
+    }
+}
+
 /// `seacover/<fleet>/mission`: the mission document (as `GET
 /// /api/v1/mission`) with its revision. Every member keeps the highest
 /// valid revision it has seen, answers queries with it, and refuses (and
