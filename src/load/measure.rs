@@ -10,12 +10,14 @@ use std::time::{Duration, Instant};
 use super::link::{LinkOutcome, Shared};
 use super::report::{CoordinatorFigures, Latency, LinkCounts, LoadReport, TargetCheck, kib, opt};
 use super::scrape::{Scrape, bucket_latency, delta, machine_shares};
-use super::{LoadConfig, LoadError};
 
 /// Everything a run saw.
 pub(super) struct Measured<'a> {
     pub(super) base: String,
-    pub(super) config: &'a LoadConfig,
+    /// Links asked for, poses a second per link, the coordinator's warp.
+    pub(super) vessels: usize,
+    pub(super) rate_hz: f64,
+    pub(super) time_warp: f64,
     pub(super) tick_hz: f64,
     pub(super) shared: &'a Shared,
     pub(super) outcomes: Vec<LinkOutcome>,
@@ -26,11 +28,13 @@ pub(super) struct Measured<'a> {
     pub(super) notes: Vec<String>,
 }
 
-/// The report, or [`LoadError::NoLinks`] when no link connected.
-pub(super) fn report(m: Measured<'_>) -> Result<LoadReport, LoadError> {
+/// The report, or the first link's problem when no link connected.
+pub(super) fn report(m: Measured<'_>) -> Result<LoadReport, String> {
     let Measured {
         base,
-        config,
+        vessels: n,
+        rate_hz,
+        time_warp,
         tick_hz,
         shared,
         mut outcomes,
@@ -39,14 +43,13 @@ pub(super) fn report(m: Measured<'_>) -> Result<LoadReport, LoadError> {
         warmup,
         mut notes,
     } = m;
-    let n = config.vessels;
     let connected = outcomes.iter().filter(|o| o.connected).count();
     if connected == 0 {
         let why = outcomes
             .iter()
             .find_map(|o| o.problem.clone())
             .unwrap_or_else(|| "cancelled".into());
-        return Err(LoadError::NoLinks(why));
+        return Err(why);
     }
     let held = outcomes
         .iter()
@@ -84,9 +87,9 @@ pub(super) fn report(m: Measured<'_>) -> Result<LoadReport, LoadError> {
     Ok(LoadReport {
         server: base,
         vessels: n,
-        rate_hz: config.rate_hz,
+        rate_hz,
         tick_hz,
-        time_warp: config.time_warp,
+        time_warp,
         window_s: window,
         warmup_s: warmup.as_secs_f64(),
         links,

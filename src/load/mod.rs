@@ -314,7 +314,9 @@ pub async fn run(config: LoadConfig, shutdown: CancellationToken) -> Result<Load
     }
     measure::report(measure::Measured {
         base,
-        config: &config,
+        vessels: config.vessels,
+        rate_hz: config.rate_hz,
+        time_warp: config.time_warp,
         tick_hz: mission.tick_hz,
         shared: &shared,
         outcomes,
@@ -323,6 +325,7 @@ pub async fn run(config: LoadConfig, shutdown: CancellationToken) -> Result<Load
         warmup,
         notes,
     })
+    .map_err(LoadError::NoLinks)
 }
 
 /// 1000 links need 1000 descriptors on top of the runtime's own.

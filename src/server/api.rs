@@ -26,7 +26,7 @@ use crate::protocol::{
     tag = "system",
     responses((status = 200, description = "The server is up.", body = String, content_type = "text/plain", example = "ok")),
 )]
-pub async fn healthz() -> &'static str {
+pub(super) async fn healthz() -> &'static str {
     "ok"
 }
 
@@ -37,7 +37,7 @@ pub async fn healthz() -> &'static str {
     tag = "mission",
     responses((status = 200, description = "The current mission.", body = MissionDocument)),
 )]
-pub async fn mission(State(app): State<AppState>) -> Json<MissionDocument> {
+pub(super) async fn mission(State(app): State<AppState>) -> Json<MissionDocument> {
     Json(app.snapshot.borrow().document.mission.clone())
 }
 
@@ -48,7 +48,7 @@ pub async fn mission(State(app): State<AppState>) -> Json<MissionDocument> {
     tag = "mission",
     responses((status = 200, description = "The risk objects.", body = Vec<RiskObjectDocument>)),
 )]
-pub async fn risk_objects(State(app): State<AppState>) -> Json<Vec<RiskObjectDocument>> {
+pub(super) async fn risk_objects(State(app): State<AppState>) -> Json<Vec<RiskObjectDocument>> {
     Json(app.snapshot.borrow().document.mission.risk.objects.clone())
 }
 
@@ -59,7 +59,7 @@ pub async fn risk_objects(State(app): State<AppState>) -> Json<Vec<RiskObjectDoc
     tag = "vessels",
     responses((status = 200, description = "Pose, link state, cell and last command of each vessel.", body = Vec<VesselStatusDocument>)),
 )]
-pub async fn vessels(State(app): State<AppState>) -> Json<Vec<VesselStatusDocument>> {
+pub(super) async fn vessels(State(app): State<AppState>) -> Json<Vec<VesselStatusDocument>> {
     Json(app.snapshot.borrow().document.vessels.clone())
 }
 
@@ -74,7 +74,7 @@ pub async fn vessels(State(app): State<AppState>) -> Json<Vec<VesselStatusDocume
         (status = 404, response = super::responses::NotFound),
     ),
 )]
-pub async fn vessel(
+pub(super) async fn vessel(
     State(app): State<AppState>,
     Path(id): Path<String>,
 ) -> Result<Json<VesselStatusDocument>, ApiError> {
@@ -104,7 +104,7 @@ pub async fn vessel(
     ),
     security(("bearer" = [])),
 )]
-pub async fn delete_vessel(
+pub(super) async fn delete_vessel(
     State(app): State<AppState>,
     Path(id): Path<String>,
 ) -> Result<StatusCode, ApiError> {
@@ -124,7 +124,7 @@ pub async fn delete_vessel(
     tag = "coverage",
     responses((status = 200, description = "Tick, mission time, H and cells.", body = CoverageDocument)),
 )]
-pub async fn coverage(State(app): State<AppState>) -> Json<CoverageDocument> {
+pub(super) async fn coverage(State(app): State<AppState>) -> Json<CoverageDocument> {
     Json(app.snapshot.borrow().coverage.clone())
 }
 
@@ -144,7 +144,7 @@ pub async fn coverage(State(app): State<AppState>) -> Json<CoverageDocument> {
         (status = 404, description = "`not_found`: the mission has no origin to place the partition on the globe.", body = crate::protocol::ErrorDocument),
     ),
 )]
-pub async fn coverage_geojson(State(app): State<AppState>) -> Result<Response, ApiError> {
+pub(super) async fn coverage_geojson(State(app): State<AppState>) -> Result<Response, ApiError> {
     let snap = app.snapshot.borrow().clone();
     let frame = match snap.document.mission.origin {
         Some(origin) => crate::mission::origin_frame(origin)?,
@@ -189,7 +189,7 @@ pub async fn coverage_geojson(State(app): State<AppState>) -> Result<Response, A
         (status = 503, response = super::responses::ShuttingDown),
     ),
 )]
-pub async fn evaluate(
+pub(super) async fn evaluate(
     State(app): State<AppState>,
     body: Bytes,
 ) -> Result<Json<EvaluationDocument>, ApiError> {
@@ -264,7 +264,10 @@ fn respond(status: StatusCode, result: ChangeResult) -> Response {
     ),
     security(("bearer" = [])),
 )]
-pub async fn put_origin(State(app): State<AppState>, body: Bytes) -> Result<Response, ApiError> {
+pub(super) async fn put_origin(
+    State(app): State<AppState>,
+    body: Bytes,
+) -> Result<Response, ApiError> {
     let origin: OriginDocument = parse(&body)?;
     Ok(respond(
         StatusCode::OK,
@@ -293,7 +296,10 @@ pub async fn put_origin(State(app): State<AppState>, body: Bytes) -> Result<Resp
     ),
     security(("bearer" = [])),
 )]
-pub async fn put_region(State(app): State<AppState>, body: Bytes) -> Result<Response, ApiError> {
+pub(super) async fn put_region(
+    State(app): State<AppState>,
+    body: Bytes,
+) -> Result<Response, ApiError> {
     let region: RegionInput = parse(&body)?;
     Ok(respond(
         StatusCode::OK,
@@ -319,7 +325,10 @@ pub async fn put_region(State(app): State<AppState>, body: Bytes) -> Result<Resp
     ),
     security(("bearer" = [])),
 )]
-pub async fn put_base(State(app): State<AppState>, body: Bytes) -> Result<Response, ApiError> {
+pub(super) async fn put_base(
+    State(app): State<AppState>,
+    body: Bytes,
+) -> Result<Response, ApiError> {
     let v: crate::protocol::RiskBaseDocument = parse(&body)?;
     Ok(respond(
         StatusCode::OK,
@@ -349,7 +358,10 @@ pub async fn put_base(State(app): State<AppState>, body: Bytes) -> Result<Respon
     ),
     security(("bearer" = [])),
 )]
-pub async fn post_object(State(app): State<AppState>, body: Bytes) -> Result<Response, ApiError> {
+pub(super) async fn post_object(
+    State(app): State<AppState>,
+    body: Bytes,
+) -> Result<Response, ApiError> {
     let object: RiskObjectInput = parse(&body)?;
     Ok(respond(
         StatusCode::CREATED,
@@ -368,7 +380,7 @@ pub async fn post_object(State(app): State<AppState>, body: Bytes) -> Result<Res
         (status = 404, response = super::responses::NotFound),
     ),
 )]
-pub async fn get_object(
+pub(super) async fn get_object(
     State(app): State<AppState>,
     Path(id): Path<String>,
 ) -> Result<Json<RiskObjectDocument>, ApiError> {
@@ -406,7 +418,7 @@ pub async fn get_object(
     ),
     security(("bearer" = [])),
 )]
-pub async fn put_object(
+pub(super) async fn put_object(
     State(app): State<AppState>,
     Path(id): Path<String>,
     body: Bytes,
@@ -434,7 +446,7 @@ pub async fn put_object(
     ),
     security(("bearer" = [])),
 )]
-pub async fn delete_object(
+pub(super) async fn delete_object(
     State(app): State<AppState>,
     Path(id): Path<String>,
 ) -> Result<Response, ApiError> {
@@ -454,7 +466,7 @@ pub async fn delete_object(
     tag = "coverage",
     responses((status = 200, description = "The stride and the samples (tick, mission time, H), oldest first.", body = crate::protocol::CoverageHistoryDocument)),
 )]
-pub async fn coverage_history(
+pub(super) async fn coverage_history(
     State(app): State<AppState>,
 ) -> Json<crate::protocol::CoverageHistoryDocument> {
     let history = app.snapshot.borrow().history.clone();

@@ -41,7 +41,7 @@ pub struct WriteLimiter {
 }
 
 /// A bucket refilled at `per_second` that holds `burst` writes.
-pub fn write_limiter(per_second: u32, burst: u32) -> WriteLimiter {
+pub(super) fn write_limiter(per_second: u32, burst: u32) -> WriteLimiter {
     let rate = NonZeroU32::new(per_second.max(1)).expect("at least 1");
     let burst = NonZeroU32::new(burst.max(1)).expect("at least 1");
     WriteLimiter {

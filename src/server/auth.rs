@@ -33,11 +33,15 @@ fn presented(request: &Request) -> Option<String> {
 }
 
 /// Whether `given` equals `expected`, in time independent of where they differ.
-pub fn token_matches(expected: &str, given: &str) -> bool {
+pub(super) fn token_matches(expected: &str, given: &str) -> bool {
     expected.as_bytes().ct_eq(given.as_bytes()).into()
 }
 
-pub async fn require_token(State(app): State<AppState>, request: Request, next: Next) -> Response {
+pub(super) async fn require_token(
+    State(app): State<AppState>,
+    request: Request,
+    next: Next,
+) -> Response {
     if let Some(expected) = &app.token {
         let ok = presented(&request).is_some_and(|given| token_matches(expected, &given));
         if !ok {
@@ -49,7 +53,11 @@ pub async fn require_token(State(app): State<AppState>, request: Request, next: 
 
 /// Spends one write from the bucket for every request that is not a GET
 /// (the vessel link's upgrade is a GET).
-pub async fn limit_writes(State(app): State<AppState>, request: Request, next: Next) -> Response {
+pub(super) async fn limit_writes(
+    State(app): State<AppState>,
+    request: Request,
+    next: Next,
+) -> Response {
     if request.method() != axum::http::Method::GET && app.writes.bucket.check().is_err() {
         metrics::counter!(super::metrics::MESSAGES_REJECTED, "reason" => "rate_limited")
             .increment(1);

@@ -53,7 +53,7 @@ impl HttpBody for Tracked {
 
 /// Marks the response `Connection: close` when the request had a body that
 /// nobody read to its end.
-pub async fn unread_bodies(request: Request, next: Next) -> Response {
+pub(super) async fn unread_bodies(request: Request, next: Next) -> Response {
     if request.body().is_end_stream() {
         return next.run(request).await;
     }

@@ -16,7 +16,7 @@ pub const MAX_BODY: usize = 1024 * 1024;
 /// its extensions for the rejection events
 /// ([`record_rejections`](super::events::record_rejections)).
 #[derive(Debug, Clone, Copy)]
-pub struct ErrorCode(pub &'static str);
+pub(super) struct ErrorCode(pub &'static str);
 
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ApiError {
@@ -135,18 +135,21 @@ impl IntoResponse for ApiError {
 
 /// The answer to a path no route has: the JSON error of docs/api.md, not an empty
 /// body.
-pub async fn not_found(uri: axum::http::Uri) -> ApiError {
+pub(super) async fn not_found(uri: axum::http::Uri) -> ApiError {
     ApiError::NotFound(format!("no such path: {}", uri.path()))
 }
 
 /// The answer to a method a route does not have; the router adds `Allow`.
-pub async fn method_not_allowed(method: axum::http::Method, uri: axum::http::Uri) -> ApiError {
+pub(super) async fn method_not_allowed(
+    method: axum::http::Method,
+    uri: axum::http::Uri,
+) -> ApiError {
     ApiError::MethodNotAllowed(format!("{method} is not allowed on {}", uri.path()))
 }
 
 /// Gives the 413 that the body limit answers (plain text, from axum) the
 /// JSON error shape of every other error.
-pub async fn json_too_large(response: Response) -> Response {
+pub(super) async fn json_too_large(response: Response) -> Response {
     let is_json = response
         .headers()
         .get(axum::http::header::CONTENT_TYPE)

@@ -16,7 +16,7 @@ use crate::recorder::messages::{EventKind, EventRecord};
 /// The remote address of a request, when the server knows it (it is served
 /// with connect info; a router used without, as in some tests, has none).
 #[derive(Debug, Clone, Copy)]
-pub struct Peer(pub Option<SocketAddr>);
+pub(super) struct Peer(pub Option<SocketAddr>);
 
 impl<S: Send + Sync> axum::extract::FromRequestParts<S> for Peer {
     type Rejection = std::convert::Infallible;
@@ -33,7 +33,7 @@ impl<S: Send + Sync> axum::extract::FromRequestParts<S> for Peer {
 
 /// Records every request answered with an error status as a
 /// `rejected_request` event: its code, the peer, the method and path.
-pub async fn record_rejections(
+pub(super) async fn record_rejections(
     State(app): State<AppState>,
     request: Request,
     next: Next,

@@ -6,22 +6,22 @@
 //! task send every vessel `shutting_down`, and waits (bounded) for every
 //! tracked WebSocket task.
 
-pub mod api;
+mod api;
 mod app;
-pub mod auth;
+mod auth;
 mod close;
 pub mod config;
-pub mod coordinator;
-pub mod error;
-pub mod events;
+mod coordinator;
+mod error;
+mod events;
 pub mod metrics;
 pub mod openapi;
 pub mod peer;
 pub mod replay;
-pub mod responses;
-pub mod store;
-pub mod web;
-pub mod ws;
+mod responses;
+mod store;
+mod web;
+mod ws;
 
 use std::net::SocketAddr;
 use std::path::PathBuf;

@@ -25,7 +25,7 @@ fn error_response(description: &str) -> RefOr<Response> {
 macro_rules! error_responses {
     ($($name:ident => $description:literal,)*) => {$(
         #[doc = $description]
-        pub struct $name;
+        pub(super) struct $name;
 
         impl<'a> ToResponse<'a> for $name {
             fn response() -> (&'a str, RefOr<Response>) {

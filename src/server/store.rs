@@ -35,7 +35,7 @@ const META: TableDefinition<&str, &str> = TableDefinition::new("meta");
 const OBJECTS: TableDefinition<&str, (u64, &str)> = TableDefinition::new("objects");
 
 /// The file inside the data directory.
-pub const FILE_NAME: &str = "mission.redb";
+pub(super) const FILE_NAME: &str = "mission.redb";
 
 #[derive(Debug, thiserror::Error)]
 pub enum StoreError {
@@ -63,7 +63,7 @@ fn redb_err(e: impl Into<redb::Error>) -> StoreError {
 }
 
 /// An open store. Owned by the tick task; blocking calls (a commit fsyncs).
-pub struct Store {
+pub(super) struct Store {
     db: Database,
     path: PathBuf,
 }
@@ -87,7 +87,7 @@ fn parse<T: serde::de::DeserializeOwned>(what: &str, text: &str) -> Result<T, St
 
 impl Store {
     /// Opens (creating when needed) the store under `dir`.
-    pub fn open(dir: &Path) -> Result<Store, StoreError> {
+    pub(super) fn open(dir: &Path) -> Result<Store, StoreError> {
         std::fs::create_dir_all(dir).map_err(|source| StoreError::Directory {
             path: dir.to_path_buf(),
             source,
@@ -100,12 +100,12 @@ impl Store {
         Ok(Store { db, path })
     }
 
-    pub fn path(&self) -> &Path {
+    pub(super) fn path(&self) -> &Path {
         &self.path
     }
 
     /// The stored mission, or `None` when the store is new.
-    pub fn load(&self) -> Result<Option<MissionDocument>, StoreError> {
+    pub(super) fn load(&self) -> Result<Option<MissionDocument>, StoreError> {
         let read = self.db.begin_read().map_err(redb_err)?;
         let meta = match read.open_table(META) {
             Ok(t) => t,
@@ -161,7 +161,7 @@ impl Store {
     }
 
     /// Replaces whatever is stored with `mission`, in one transaction.
-    pub fn save(&self, mission: &MissionDocument) -> Result<(), StoreError> {
+    pub(super) fn save(&self, mission: &MissionDocument) -> Result<(), StoreError> {
         self.write(|meta, objects| {
             meta.insert("origin", json(&mission.origin).as_str())?;
             meta.insert("region", json(&mission.region).as_str())?;
@@ -185,7 +185,11 @@ impl Store {
     /// Makes one accepted change durable. `result` is what
     /// [`Mission::changed`](crate::mission::Mission::changed) answered, which
     /// carries the id a new object was given.
-    pub fn apply(&self, change: &MissionChange, result: &ChangeResult) -> Result<(), StoreError> {
+    pub(super) fn apply(
+        &self,
+        change: &MissionChange,
+        result: &ChangeResult,
+    ) -> Result<(), StoreError> {
         if let (MissionChange::Adopt(_), ChangeResult::Mission(mission)) = (change, result) {
             return self.save(mission);
         }

@@ -60,11 +60,11 @@ const FILES: &[(&str, &str, &str)] = &[
     ),
 ];
 
-/// What serves the page: a coordinator (the default) or a replay, which
-/// adds `Extension(PageMode::Replay)` to its router.
+/// What serves the page when it is not a coordinator (the default, with
+/// no extension): a replay adds `Extension(PageMode::Replay)` to its
+/// router.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum PageMode {
-    Live,
+pub(super) enum PageMode {
     Replay,
 }
 
@@ -75,7 +75,7 @@ const HTML_TAG: &str = "<html lang=\"en\">";
 fn page(mode: Option<Extension<PageMode>>) -> Response {
     let mode = match mode {
         Some(Extension(PageMode::Replay)) => "replay",
-        Some(Extension(PageMode::Live)) | None => "live",
+        None => "live",
     };
     let html = include_str!("../../web/index.html").replacen(
         HTML_TAG,
@@ -108,13 +108,13 @@ fn file(name: &str) -> Response {
 }
 
 /// `GET /`.
-pub async fn index(mode: Option<Extension<PageMode>>) -> Response {
+pub(super) async fn index(mode: Option<Extension<PageMode>>) -> Response {
     page(mode)
 }
 
 /// `GET /{file}`: the page's other files (and the page again as
 /// `/index.html`).
-pub async fn asset(mode: Option<Extension<PageMode>>, Path(name): Path<String>) -> Response {
+pub(super) async fn asset(mode: Option<Extension<PageMode>>, Path(name): Path<String>) -> Response {
     if name == "index.html" {
         page(mode)
     } else {

@@ -25,14 +25,14 @@ use crate::protocol::{CoordinatorMessage, PoseDocument, VesselMessage};
 use crate::recorder::messages::{EventKind, EventRecord};
 
 /// Largest frame accepted on either socket.
-pub const MAX_FRAME: usize = 64 * 1024;
+pub(super) const MAX_FRAME: usize = 64 * 1024;
 /// Malformed frames tolerated on one link before it is closed.
 const MAX_GARBAGE: u32 = 5;
 /// Poses a link may send per mission second, on average (five times the
 /// 20 Hz a vessel reports at); a burst of as many is allowed. Beyond it
 /// poses are dropped, counted and answered at most once a mission second:
 /// a flooding link cannot take the coordinator's cores from the others.
-pub const MAX_POSE_RATE: f64 = 100.0;
+pub(super) const MAX_POSE_RATE: f64 = 100.0;
 
 /// A link's pose budget: a token bucket refilled on the mission clock, so
 /// that the limit is per mission second whatever the time warp.
@@ -100,7 +100,11 @@ fn error(code: &str, message: impl Into<String>) -> CoordinatorMessage {
     }
 }
 
-pub async fn link(ws: WebSocketUpgrade, Peer(peer): Peer, State(app): State<AppState>) -> Response {
+pub(super) async fn link(
+    ws: WebSocketUpgrade,
+    Peer(peer): Peer,
+    State(app): State<AppState>,
+) -> Response {
     let tracker = app.tracker.clone();
     ws.max_message_size(MAX_FRAME)
         .max_frame_size(MAX_FRAME)
@@ -542,7 +546,7 @@ async fn refuse(mut sink: impl SinkExt<Message> + Unpin, message: CoordinatorMes
 /// `GET /api/v1/stream`: the newest snapshot on connect, then every change,
 /// at most 10 per second. A slow client skips to the newest one (a `watch`
 /// keeps only the latest), so nothing queues up.
-pub async fn stream(ws: WebSocketUpgrade, State(app): State<AppState>) -> Response {
+pub(super) async fn stream(ws: WebSocketUpgrade, State(app): State<AppState>) -> Response {
     let tracker = app.tracker.clone();
     ws.max_message_size(MAX_FRAME)
         .read_buffer_size(READ_BUFFER)

@@ -374,7 +374,7 @@ pub(crate) mod fixtures {
     /// `examples/island-mixed.json`: the paper's square with an island, four
     /// vessels with β = 0.001 and four with β = 0.004 (each of those wins a
     /// disc round itself).
-    pub fn mixed_fleet() -> (Region, EvaluationDocument) {
+    pub(crate) fn mixed_fleet() -> (Region, EvaluationDocument) {
         let text = include_str!("../../../examples/island-mixed.json");
         let scenario = Scenario::from_document(&parse_document(text).unwrap()).unwrap();
         let evaluation = scenario.evaluate(&Options::default());
@@ -383,7 +383,7 @@ pub(crate) mod fixtures {
     }
 
     /// An edge of a cell document as the core's piece.
-    pub fn piece(edge: &EdgeDocument) -> Piece {
+    pub(crate) fn piece(edge: &EdgeDocument) -> Piece {
         let p = |[x, y]: XY| Point { x, y };
         match *edge {
             EdgeDocument::Segment { from, to } => Piece::Segment {

@@ -252,7 +252,7 @@ mod choose {
 
     /// `Ok(true)` for the geographic form (`lat`, `lon`), `Ok(false)` for
     /// the local one (`x`, `y`).
-    pub fn geographic<E: Error>(value: &Value) -> Result<bool, E> {
+    pub(crate) fn geographic<E: Error>(value: &Value) -> Result<bool, E> {
         let Value::Object(map) = value else {
             return Ok(false);
         };
@@ -273,7 +273,7 @@ mod choose {
     /// chosen form lacks or forbids is refused with serde's own messages.
     #[derive(serde::Deserialize)]
     #[serde(deny_unknown_fields)]
-    pub struct VesselKeys {
+    pub(crate) struct VesselKeys {
         id: Option<String>,
         x: Option<f64>,
         y: Option<f64>,
@@ -288,7 +288,7 @@ mod choose {
     const GEO: &[&str] = &["id", "lat", "lon", "psi", "k", "beta"];
 
     impl VesselKeys {
-        pub fn into_input<E: Error>(self) -> Result<super::VesselInput, E> {
+        pub(crate) fn into_input<E: Error>(self) -> Result<super::VesselInput, E> {
             let local = self.x.is_some() && self.y.is_some();
             let geo = self.lat.is_some() && self.lon.is_some();
             if local && geo {
@@ -342,7 +342,7 @@ mod choose {
     }
 
     /// `Ok(true)` for GeoJSON (a `type` member).
-    pub fn geojson<E: Error>(value: &Value) -> Result<bool, E> {
+    pub(crate) fn geojson<E: Error>(value: &Value) -> Result<bool, E> {
         let Value::Object(map) = value else {
             return Ok(false);
         };
@@ -354,7 +354,7 @@ mod choose {
         Ok(has(map, "type"))
     }
 
-    pub fn either<L: DeserializeOwned, G: DeserializeOwned, T, E: Error>(
+    pub(crate) fn either<L: DeserializeOwned, G: DeserializeOwned, T, E: Error>(
         value: Value,
         second: bool,
         local: impl FnOnce(L) -> T,

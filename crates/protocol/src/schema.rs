@@ -36,17 +36,17 @@ fn or_null(array: ArrayBuilder) -> ArrayBuilder {
     )
 }
 
-pub fn region_polygon() -> ArrayBuilder {
+pub(crate) fn region_polygon() -> ArrayBuilder {
     ring("Outer ring `[[x, y], …]` in metres, without the closing vertex.")
 }
 
-pub fn region_holes() -> ArrayBuilder {
+pub(crate) fn region_holes() -> ArrayBuilder {
     ArrayBuilder::new().items(points()).description(Some(
         "Islands: rings strictly inside the polygon and disjoint.",
     ))
 }
 
-pub fn cell_polygon() -> ArrayBuilder {
+pub(crate) fn cell_polygon() -> ArrayBuilder {
     or_null(ring(
         "Outer ring of the cell (of its largest piece when it has several), \
          counter-clockwise, without the closing vertex; `null` when empty. A curved \
@@ -55,7 +55,7 @@ pub fn cell_polygon() -> ArrayBuilder {
     ))
 }
 
-pub fn status_polygon() -> ArrayBuilder {
+pub(crate) fn status_polygon() -> ArrayBuilder {
     or_null(ring(
         "The cell's outer ring (as a cell's `polygon`: arcs as vertices within 0.1 m); \
          `null` when the vessel has no cell.",

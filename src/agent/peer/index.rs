@@ -25,7 +25,7 @@ use rustc_hash::FxHashMap;
 /// Side of a square of the grid [m]: a quarter of what a vessel of the
 /// paper's actuator reaches (2r ≈ 235 m plus 60 m of extrapolation), so a
 /// query looks at some 100 squares, most of them inside its disc.
-pub const CELL: f64 = 64.0;
+pub(super) const CELL: f64 = 64.0;
 
 type Square = (i32, i32);
 
@@ -39,13 +39,13 @@ struct Filed {
 
 /// Where a slot is filed: its square and its place in the arrival order.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Key {
+pub(super) struct Key {
     square: Square,
     arrival: (Instant, u64),
 }
 
 #[derive(Debug, Default)]
-pub struct Index {
+pub(super) struct Index {
     squares: FxHashMap<Square, Vec<Filed>>,
     arrivals: BTreeMap<(Instant, u64), usize>,
     /// Breaks ties between beacons that arrived at the same instant.
@@ -60,7 +60,7 @@ fn square_of(x: f64, y: f64) -> Square {
 impl Index {
     /// Files `slot`, whose newest beacon is at (x, y) and arrived at
     /// `arrived`, in place of where `old` filed it.
-    pub fn place(
+    pub(super) fn place(
         &mut self,
         slot: usize,
         old: Option<Key>,
@@ -83,7 +83,7 @@ impl Index {
     }
 
     /// Forgets `slot`, filed under `key`.
-    pub fn remove(&mut self, slot: usize, key: Key) {
+    pub(super) fn remove(&mut self, slot: usize, key: Key) {
         self.arrivals.remove(&key.arrival);
         self.unfile(slot, key.square);
     }
@@ -100,7 +100,7 @@ impl Index {
     }
 
     /// The slots in arrival order, oldest first, with their arrival.
-    pub fn oldest(&self) -> impl Iterator<Item = (Instant, usize)> + '_ {
+    pub(super) fn oldest(&self) -> impl Iterator<Item = (Instant, usize)> + '_ {
         self.arrivals.iter().map(|(&(at, _), &slot)| (at, slot))
     }
 
@@ -108,7 +108,7 @@ impl Index {
     /// `centre`, or `None` when the disc touches more squares than `limit`
     /// (the caller then walks every slot: an unbounded or fleet-wide
     /// disc).
-    pub fn near(
+    pub(super) fn near(
         &self,
         centre: (f64, f64),
         radius: f64,

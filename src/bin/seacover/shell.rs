@@ -8,7 +8,7 @@ use anyhow::Context;
 use tokio_util::sync::CancellationToken;
 
 /// Runs `future` to completion on a multi-threaded runtime.
-pub fn block_on<F: std::future::Future>(future: F) -> F::Output {
+pub(crate) fn block_on<F: std::future::Future>(future: F) -> F::Output {
     tokio::runtime::Builder::new_multi_thread()
         .enable_all()
         .build()
@@ -18,7 +18,7 @@ pub fn block_on<F: std::future::Future>(future: F) -> F::Output {
 
 /// The exit code of a subcommand's outcome; a failure is printed as
 /// `seacover: ` and its causes.
-pub fn report(result: anyhow::Result<()>) -> ExitCode {
+pub(crate) fn report(result: anyhow::Result<()>) -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         // A reader that stops early (`seacover record export … | head`)
@@ -55,7 +55,7 @@ fn error_chain(e: &anyhow::Error) -> String {
 }
 
 /// A token that ctrl-c or SIGTERM cancels.
-pub fn stop_on_signal() -> CancellationToken {
+pub(crate) fn stop_on_signal() -> CancellationToken {
     let token = CancellationToken::new();
     let cancel = token.clone();
     tokio::spawn(async move {
@@ -77,7 +77,7 @@ pub fn stop_on_signal() -> CancellationToken {
     token
 }
 
-pub fn check_warp(w: f64) -> anyhow::Result<()> {
+pub(crate) fn check_warp(w: f64) -> anyhow::Result<()> {
     anyhow::ensure!(
         w.is_finite() && (0.01..=1000.0).contains(&w),
         "--time-warp must be in [0.01, 1000]"
@@ -87,7 +87,9 @@ pub fn check_warp(w: f64) -> anyhow::Result<()> {
 
 /// Binds `bind` and returns the listener with a token that ctrl-c or SIGTERM
 /// cancels.
-pub async fn listen(bind: &str) -> anyhow::Result<(tokio::net::TcpListener, CancellationToken)> {
+pub(crate) async fn listen(
+    bind: &str,
+) -> anyhow::Result<(tokio::net::TcpListener, CancellationToken)> {
     let listener = tokio::net::TcpListener::bind(bind)
         .await
         .with_context(|| format!("binding {bind}"))?;
@@ -96,7 +98,7 @@ pub async fn listen(bind: &str) -> anyhow::Result<(tokio::net::TcpListener, Canc
 
 /// `--preset`: a vessel model the library knows.
 #[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum Preset {
+pub(crate) enum Preset {
     /// The paper's hull (section 5).
     Paper,
     /// Maritime Robotics' Otter USV.
@@ -104,14 +106,14 @@ pub enum Preset {
 }
 
 impl Preset {
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             Preset::Paper => "paper",
             Preset::Otter => "otter",
         }
     }
 
-    pub fn params(self) -> seacover::control::model::VesselParams {
+    pub(crate) fn params(self) -> seacover::control::model::VesselParams {
         use seacover::control::model::VesselParams;
         match self {
             Preset::Paper => VesselParams::PAPER,
@@ -122,7 +124,7 @@ impl Preset {
 
 /// The Zenoh flags of `agent --peer` and `serve --peer`.
 #[derive(clap::Args, Debug, Clone)]
-pub struct ZenohArgs {
+pub(crate) struct ZenohArgs {
     /// Listen for other members on this Zenoh endpoint (repeatable), e.g.
     /// `tcp/0.0.0.0:7447`; for networks where multicast scouting does not
     /// pass.
@@ -139,7 +141,7 @@ pub struct ZenohArgs {
 }
 
 impl ZenohArgs {
-    pub fn options(&self) -> seacover::agent::peer::session::ZenohOptions {
+    pub(crate) fn options(&self) -> seacover::agent::peer::session::ZenohOptions {
         seacover::agent::peer::session::ZenohOptions {
             mode: Default::default(),
             listen: self.zenoh_listen.clone(),
@@ -154,7 +156,7 @@ impl ZenohArgs {
 /// for 10 s when TCP links to vanished peers are closed (Zenoh lingers on
 /// each close for 10 s), which a peer fleet whose neighbours drop out of
 /// radio range cannot afford. Set before any thread starts.
-pub fn zenoh_runtime() {
+pub(crate) fn zenoh_runtime() {
     if std::env::var_os("ZENOH_RUNTIME").is_none() {
         // SAFETY: called first thing in `main`, before any other thread
         // exists that could read the environment.

@@ -21,11 +21,11 @@ use std::sync::Arc;
 use crate::protocol::{CoverageHistoryDocument, CoverageSampleDocument};
 
 /// The most samples a history holds (even, so a halving keeps the first).
-pub const CAPACITY: usize = 1000;
+pub(crate) const CAPACITY: usize = 1000;
 
 /// A bounded, decimated H(P) history.
 #[derive(Debug, Clone)]
-pub struct History {
+pub(crate) struct History {
     document: Arc<CoverageHistoryDocument>,
 }
 
@@ -36,7 +36,7 @@ impl Default for History {
 }
 
 impl History {
-    pub fn new() -> History {
+    pub(crate) fn new() -> History {
         History {
             document: Arc::new(CoverageHistoryDocument {
                 stride: 1,
@@ -48,7 +48,7 @@ impl History {
     /// Takes H at `tick` (mission time `time`): kept when it is the first or
     /// at least `stride` ticks after the last kept one (a tick published
     /// twice, or out of order, is not kept again); `true` when kept.
-    pub fn push(&mut self, tick: u64, time: f64, h: f64) -> bool {
+    pub(crate) fn push(&mut self, tick: u64, time: f64, h: f64) -> bool {
         let due = self
             .document
             .samples
@@ -73,7 +73,7 @@ impl History {
     }
 
     /// The history as readers get it.
-    pub fn document(&self) -> Arc<CoverageHistoryDocument> {
+    pub(crate) fn document(&self) -> Arc<CoverageHistoryDocument> {
         self.document.clone()
     }
 }

@@ -19,7 +19,7 @@ use crate::recorder::Recorder;
 use crate::recorder::messages::{EventKind, EventRecord};
 
 /// A vessel's repeated refusals are logged at most this often [mission s].
-pub const LOG_EVERY: f64 = 10.0;
+pub(super) const LOG_EVERY: f64 = 10.0;
 
 /// What a pose is judged against, at one tick.
 pub(super) struct Bench<'a> {
@@ -50,7 +50,7 @@ struct Stray {
 }
 
 /// [`QuarantineDocument::code`] of a vessel held by [`Standing::hold_stray`].
-pub const UNKNOWN_MISSION: &str = "unknown_mission";
+pub(super) const UNKNOWN_MISSION: &str = "unknown_mission";
 
 #[derive(Debug, Clone)]
 struct Held {
@@ -91,13 +91,13 @@ fn fix(p: &PoseDocument) -> Fix {
 
 impl Standing {
     /// Out of the partition and held.
-    pub fn held(&self) -> bool {
+    pub(super) fn held(&self) -> bool {
         self.held.is_some() || self.stray.is_some()
     }
 
     /// The quarantine as `GET /api/v1/vessels` shows it: a stray mission
     /// first, since consistent poses do not end it.
-    pub fn quarantine(&self) -> Option<QuarantineDocument> {
+    pub(super) fn quarantine(&self) -> Option<QuarantineDocument> {
         self.stray
             .as_ref()
             .map(|s| s.document.clone())
@@ -107,7 +107,7 @@ impl Standing {
     /// Holds vessel `id`, which says it follows mission `followed`, not
     /// this coordinator's: a coordinator that only has its start-up
     /// default (a fresh store) must not re-task a fleet at sea.
-    pub fn hold_stray(&mut self, id: &str, followed: &str, time: f64, recorder: &Recorder) {
+    pub(super) fn hold_stray(&mut self, id: &str, followed: &str, time: f64, recorder: &Recorder) {
         let reason = format!(
             "follows mission {followed}, which this coordinator does not hold (it started \
              without a stored mission): put a mission to re-task the fleet"
@@ -131,13 +131,13 @@ impl Standing {
     }
 
     /// Held by [`Standing::hold_stray`].
-    pub fn is_stray(&self) -> bool {
+    pub(super) fn is_stray(&self) -> bool {
         self.stray.is_some()
     }
 
     /// Ends a [`Standing::hold_stray`] hold, if there is one (an operator
     /// changed the mission).
-    pub fn unstray(&mut self, id: &str, time: f64, recorder: &Recorder) {
+    pub(super) fn unstray(&mut self, id: &str, time: f64, recorder: &Recorder) {
         if self.stray.take().is_none() {
             return;
         }
@@ -150,7 +150,7 @@ impl Standing {
     }
 
     /// Judges vessel `id`'s `pose`.
-    pub fn judge(&mut self, id: &str, pose: &PoseDocument, bench: &Bench<'_>) -> Judged {
+    pub(super) fn judge(&mut self, id: &str, pose: &PoseDocument, bench: &Bench<'_>) -> Judged {
         let verdict = self
             .judge
             .judge(&sample(pose), fix(pose), bench.limits, Some(bench.region));
@@ -223,7 +223,7 @@ impl Standing {
 
     /// While quarantined, the command that holds the vessel where it was
     /// last believed to be (`at`: its believed pose, if it had one).
-    pub fn hold_command(
+    pub(super) fn hold_command(
         &mut self,
         tick: u64,
         at: Option<&PoseDocument>,

@@ -21,7 +21,7 @@
 //!   written (or half a period later at most), never while the links are
 //!   writing them.
 
-pub mod history;
+pub(super) mod history;
 mod judging;
 mod requests;
 #[cfg(test)]
@@ -121,7 +121,7 @@ pub struct Welcomed {
 /// its document's JSON, in hex. The same mission has the same name on any
 /// coordinator (a restarted one given the same `--config`), so only a
 /// different mission makes a vessel's hello disagree.
-pub fn mission_name(document: &MissionDocument) -> String {
+pub(super) fn mission_name(document: &MissionDocument) -> String {
     use sha1::Digest;
     let json = serde_json::to_vec(document).expect("a mission document serializes");
     sha1::Sha1::digest(&json)[..8]
@@ -151,7 +151,7 @@ impl Deref for Snapshot {
 
 /// Settings of the tick task.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct TickSettings {
+pub(super) struct TickSettings {
     /// Wall-clock speed-up (MOOS-IvP's time warp).
     pub time_warp: f64,
     /// A vessel silent longer than this (mission seconds) leaves the partition.
@@ -247,7 +247,7 @@ struct Fanout {
 }
 
 /// The tick task.
-pub struct Coordinator {
+pub(super) struct Coordinator {
     mission: Mission,
     settings: TickSettings,
     vessels: BTreeMap<String, Entry>,
@@ -276,7 +276,7 @@ pub struct Coordinator {
 }
 
 impl Coordinator {
-    pub fn new(
+    pub(super) fn new(
         mission: Mission,
         settings: TickSettings,
         store: Option<Store>,
@@ -324,7 +324,7 @@ impl Coordinator {
 
     /// Records to `recorder`, with ticks due on `clock`; the mission as it
     /// starts is the recording's first message.
-    pub fn recording(mut self, recorder: Recorder, clock: MissionClock) -> Coordinator {
+    pub(super) fn recording(mut self, recorder: Recorder, clock: MissionClock) -> Coordinator {
         recorder.mission(0.0, self.mission.document());
         self.recorder = recorder;
         self.clock = Some(clock);
@@ -333,13 +333,17 @@ impl Coordinator {
 
     /// Marks the mission as only the start-up default ([`Coordinator`]'s
     /// `provisional`): the store was empty, or there is none.
-    pub fn provisional(mut self) -> Coordinator {
+    pub(super) fn provisional(mut self) -> Coordinator {
         self.provisional = true;
         self
     }
 
     /// Runs until `shutdown`; then tells every vessel and returns.
-    pub async fn run(mut self, mut requests: mpsc::Receiver<Request>, shutdown: CancellationToken) {
+    pub(super) async fn run(
+        mut self,
+        mut requests: mpsc::Receiver<Request>,
+        shutdown: CancellationToken,
+    ) {
         let period =
             Duration::from_secs_f64(1.0 / (self.mission.tick_hz * self.settings.time_warp));
         // Tick 1 is due one period after the clock's origin (at once when

@@ -14,7 +14,7 @@ use fantoccini::actions::{InputSource, MOUSE_BUTTON_LEFT, MouseActions, PointerA
 use fantoccini::{Client, ClientBuilder};
 use serde_json::{Value, json};
 
-pub fn find(program: &str) -> Option<PathBuf> {
+pub(crate) fn find(program: &str) -> Option<PathBuf> {
     std::env::var_os("PATH")?
         .to_str()?
         .split(':')
@@ -23,7 +23,7 @@ pub fn find(program: &str) -> Option<PathBuf> {
 }
 
 /// chromedriver and a chromium binary, or the reason they are missing.
-pub fn browser() -> Result<(PathBuf, PathBuf), String> {
+pub(crate) fn browser() -> Result<(PathBuf, PathBuf), String> {
     let driver = find("chromedriver").ok_or("chromedriver is not installed")?;
     let chrome = ["chromium", "chromium-browser", "google-chrome"]
         .iter()
@@ -37,7 +37,8 @@ pub fn browser() -> Result<(PathBuf, PathBuf), String> {
 /// before the test starts anything timed), or `None` after saying why the
 /// test is skipped; under `CI=true` a missing browser fails the test
 /// instead.
-pub async fn browser_or_skip() -> Option<(PathBuf, PathBuf, tokio::sync::MutexGuard<'static, ()>)> {
+pub(crate) async fn browser_or_skip()
+-> Option<(PathBuf, PathBuf, tokio::sync::MutexGuard<'static, ()>)> {
     match browser() {
         Ok((driver, chrome)) => Some((driver, chrome, super::machine::HEAVY.lock().await)),
         Err(why) if std::env::var("CI").as_deref() == Ok("true") => {
@@ -56,7 +57,7 @@ pub async fn browser_or_skip() -> Option<(PathBuf, PathBuf, tokio::sync::MutexGu
 /// starts: dropped, the whole group is killed, so a test that fails before
 /// it closes its session leaves no Chromium rendering beside the tests
 /// after it.
-pub struct Driver(Child);
+pub(crate) struct Driver(Child);
 
 impl Drop for Driver {
     fn drop(&mut self) {
@@ -73,7 +74,7 @@ impl Drop for Driver {
 /// Starts chromedriver on a port it picks itself (`--port=0`) and reads
 /// the port from its banner: a port picked here and then freed for the
 /// driver could be taken by another test's listener in between.
-pub async fn start_driver(driver: &PathBuf) -> (Driver, u16) {
+pub(crate) async fn start_driver(driver: &PathBuf) -> (Driver, u16) {
     use std::io::{BufRead, BufReader};
     let mut child = Command::new(driver)
         .process_group(0)
@@ -107,7 +108,7 @@ pub async fn start_driver(driver: &PathBuf) -> (Driver, u16) {
     (driver, port)
 }
 
-pub async fn open_browser(port: u16, chrome: &std::path::Path) -> Client {
+pub(crate) async fn open_browser(port: u16, chrome: &std::path::Path) -> Client {
     let mut caps = serde_json::Map::new();
     caps.insert(
         "goog:chromeOptions".into(),
@@ -127,19 +128,19 @@ pub async fn open_browser(port: u16, chrome: &std::path::Path) -> Client {
         .expect("a browser session")
 }
 
-pub fn shots() -> PathBuf {
+pub(crate) fn shots() -> PathBuf {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/dashboard");
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }
 
-pub async fn screenshot(client: &Client, name: &str) {
+pub(crate) async fn screenshot(client: &Client, name: &str) {
     let png = client.screenshot().await.unwrap();
     std::fs::write(shots().join(format!("{name}.png")), png).unwrap();
 }
 
 /// Polls `check` (a JS expression) until it is true.
-pub async fn until(client: &Client, what: &str, check: &str) {
+pub(crate) async fn until(client: &Client, what: &str, check: &str) {
     let deadline = Instant::now() + Duration::from_secs(20);
     loop {
         let v = client
@@ -158,7 +159,7 @@ pub async fn until(client: &Client, what: &str, check: &str) {
 }
 
 /// The viewport position of a world point on the map.
-pub async fn screen_of(client: &Client, x: f64, y: f64) -> (f64, f64) {
+pub(crate) async fn screen_of(client: &Client, x: f64, y: f64) -> (f64, f64) {
     let v = client
         .execute(
             "const [sx, sy] = window.seacover.view.toScreen(arguments[0], arguments[1]);
@@ -171,7 +172,7 @@ pub async fn screen_of(client: &Client, x: f64, y: f64) -> (f64, f64) {
     (v[0].as_f64().unwrap(), v[1].as_f64().unwrap())
 }
 
-pub async fn click_at(client: &Client, x: f64, y: f64) {
+pub(crate) async fn click_at(client: &Client, x: f64, y: f64) {
     let mouse = MouseActions::new("mouse".into())
         .then(PointerAction::MoveTo {
             duration: None,
@@ -187,7 +188,7 @@ pub async fn click_at(client: &Client, x: f64, y: f64) {
     client.perform_actions(mouse).await.unwrap();
 }
 
-pub async fn drag(client: &Client, from: (f64, f64), to: (f64, f64)) {
+pub(crate) async fn drag(client: &Client, from: (f64, f64), to: (f64, f64)) {
     let mut mouse = MouseActions::new("mouse".into())
         .then(PointerAction::MoveTo {
             duration: None,
@@ -215,7 +216,7 @@ pub async fn drag(client: &Client, from: (f64, f64), to: (f64, f64)) {
 /// drains it), each entry `{level, message, source, timestamp}`: what the
 /// page logged and what the browser logged about it, such as a failed
 /// load's "the server responded with a status of 404".
-pub async fn console_log(client: &Client, driver_port: u16) -> Vec<Value> {
+pub(crate) async fn console_log(client: &Client, driver_port: u16) -> Vec<Value> {
     let session = client.session_id().await.unwrap().expect("a session");
     let answer: Value = reqwest::Client::new()
         .post(format!(
@@ -236,7 +237,7 @@ pub async fn console_log(client: &Client, driver_port: u16) -> Vec<Value> {
 
 /// The console's errors since the last call: entries at level `SEVERE`
 /// (console.error, uncaught exceptions, failed loads and requests).
-pub async fn console_errors(client: &Client, driver_port: u16) -> Vec<Value> {
+pub(crate) async fn console_errors(client: &Client, driver_port: u16) -> Vec<Value> {
     console_log(client, driver_port)
         .await
         .into_iter()

@@ -22,9 +22,9 @@ use super::process::{KillOnDrop, signal};
 
 /// libfaketime (Debian's `faketime`): a process's wall clock moved, its
 /// monotonic clock left alone ([`Setup::clock_off`]).
-pub const FAKETIME: &str = "/usr/lib/x86_64-linux-gnu/faketime/libfaketime.so.1";
+pub(crate) const FAKETIME: &str = "/usr/lib/x86_64-linux-gnu/faketime/libfaketime.so.1";
 
-pub struct Setup {
+pub(crate) struct Setup {
     /// Makes the fleet's name unique; names the test in messages.
     pub tag: String,
     pub warp: f64,
@@ -44,7 +44,7 @@ pub struct Setup {
 }
 
 impl Setup {
-    pub fn new(tag: &str, warp: f64) -> Setup {
+    pub(crate) fn new(tag: &str, warp: f64) -> Setup {
         Setup {
             tag: tag.to_string(),
             warp,
@@ -57,14 +57,14 @@ impl Setup {
         }
     }
 
-    pub fn status_every(mut self, secs: f64) -> Setup {
+    pub(crate) fn status_every(mut self, secs: f64) -> Setup {
         self.observer_args
             .extend(["--query-status-every".to_string(), secs.to_string()]);
         self
     }
 }
 
-pub struct Vessel {
+pub(crate) struct Vessel {
     pub id: String,
     pub child: KillOnDrop,
     pub log: PathBuf,
@@ -72,14 +72,14 @@ pub struct Vessel {
 
 /// The closest two vessels came, as the observer heard them.
 #[derive(Debug, Clone)]
-pub struct Approach {
+pub(crate) struct Approach {
     pub distance: f64,
     pub pair: (String, String),
     /// Mission seconds after the vessels started.
     pub at: f64,
 }
 
-pub struct Fleet {
+pub(crate) struct Fleet {
     pub name: String,
     pub warp: f64,
     /// UTC when the vessels were started.
@@ -110,7 +110,7 @@ pub struct Fleet {
 impl Fleet {
     /// The medium (hosts 0 … N, and N + 1 with a second observer) and the
     /// observers, ready; no vessel yet ([`Fleet::launch`]).
-    pub fn new(setup: Setup, python: &Path) -> Fleet {
+    pub(crate) fn new(setup: Setup, python: &Path) -> Fleet {
         let heavy = super::machine::heavy();
         let hosts = N + setup.observers + usize::from(setup.shore);
         let medium = Medium::new(hosts);
@@ -145,7 +145,7 @@ impl Fleet {
 
     /// Starts usv-i in host i at the paper's start, with the mission file
     /// unless [`Setup::mission_file`] is off.
-    pub fn launch(&mut self) {
+    pub(crate) fn launch(&mut self) {
         self.started = now();
         for (i, p) in starts().iter().enumerate() {
             let host = i + 1;
@@ -184,7 +184,7 @@ impl Fleet {
 
     /// Reads what the observers wrote since the last call; panics if a
     /// vessel has exited.
-    pub fn update(&mut self) {
+    pub(crate) fn update(&mut self) {
         self.read();
         for v in &mut self.vessels {
             if let Some(status) = v.child.0.try_wait().unwrap() {
@@ -198,7 +198,7 @@ impl Fleet {
     }
 
     /// Reads what the observers wrote since the last call.
-    pub fn read(&mut self) {
+    pub(crate) fn read(&mut self) {
         for tail in &mut self.tails {
             for r in tail.read() {
                 match r["kind"].as_str() {
@@ -236,14 +236,14 @@ impl Fleet {
         }
     }
 
-    pub fn ids() -> Vec<String> {
+    pub(crate) fn ids() -> Vec<String> {
         (1..=N).map(|i| format!("usv-{i}")).collect()
     }
 
     /// The least mission time among the running vessels (all before the
     /// launch), from the number of their newest beacons (0 while one is
     /// unheard).
-    pub fn mission_time(&self) -> f64 {
+    pub(crate) fn mission_time(&self) -> f64 {
         let ids = if self.vessels.is_empty() {
             Fleet::ids()
         } else {
@@ -261,7 +261,7 @@ impl Fleet {
 
     /// Runs until every vessel's mission time is `t`, calling `each` every
     /// 50 ms (wall).
-    pub fn run_until(&mut self, t: f64, mut each: impl FnMut(&mut Fleet)) {
+    pub(crate) fn run_until(&mut self, t: f64, mut each: impl FnMut(&mut Fleet)) {
         self.update();
         let wall = (t - self.mission_time()).max(0.0) / self.warp;
         let deadline = Instant::now() + Duration::from_secs_f64(3.0 * wall + 30.0);
@@ -288,7 +288,7 @@ impl Fleet {
     }
 
     /// Waits until the observers have heard every vessel.
-    pub fn wait_heard_all(&mut self) -> f64 {
+    pub(crate) fn wait_heard_all(&mut self) -> f64 {
         let from = now();
         wait_for(30.0, "the observers hear all 8 vessels", || {
             self.update();
@@ -298,7 +298,7 @@ impl Fleet {
     }
 
     /// The newest status of each vessel asked for since `since` (UTC).
-    pub fn newest_statuses(&self, since: f64) -> BTreeMap<String, Value> {
+    pub(crate) fn newest_statuses(&self, since: f64) -> BTreeMap<String, Value> {
         let mut newest = BTreeMap::new();
         for s in &self.statuses {
             if s["sent"].as_f64().unwrap_or(0.0) >= since
@@ -312,7 +312,7 @@ impl Fleet {
 
     /// Waits until every vessel's status says it has all the others in its
     /// partition (needs status queries); returns how long that took.
-    pub fn wait_formed(&mut self, secs: f64) -> f64 {
+    pub(crate) fn wait_formed(&mut self, secs: f64) -> f64 {
         let from = now();
         wait_for(
             secs,
@@ -331,7 +331,7 @@ impl Fleet {
     }
 
     /// The vessels' newest positions, in id order.
-    pub fn positions(&self) -> Vec<Pos> {
+    pub(crate) fn positions(&self) -> Vec<Pos> {
         Fleet::ids()
             .iter()
             .map(|id| {
@@ -351,7 +351,7 @@ impl Fleet {
 
     /// The mission's safety distance, from the observer's mission replies
     /// (every reply must give the same).
-    pub fn safety_distance(&mut self) -> f64 {
+    pub(crate) fn safety_distance(&mut self) -> f64 {
         wait_for(20.0, "a mission reply with a safety distance", || {
             self.update();
             self.other
@@ -373,7 +373,7 @@ impl Fleet {
     }
 
     /// Every beacon heard once, in the order of its sender's clock.
-    pub fn unique_beacons(&self) -> Vec<&Value> {
+    pub(crate) fn unique_beacons(&self) -> Vec<&Value> {
         let mut seen = HashSet::new();
         let mut unique: Vec<&Value> = self
             .beacons
@@ -396,7 +396,7 @@ impl Fleet {
     /// The closest two vessels came: each beacon against every other
     /// vessel's newest beacon at most 1 s (of mission time) older, moved
     /// along that vessel's ground velocity to the same instant.
-    pub fn closest_approach(&self) -> Option<Approach> {
+    pub(crate) fn closest_approach(&self) -> Option<Approach> {
         struct Seen {
             t: f64,
             x: f64,
@@ -448,7 +448,7 @@ impl Fleet {
 
     /// The wire: every beacon heard against the documented format.
     /// Returns (beacons checked, largest payload, the faults found).
-    pub fn wire(&self) -> (usize, usize, Vec<String>) {
+    pub(crate) fn wire(&self) -> (usize, usize, Vec<String>) {
         let mut faults = Vec::new();
         let undecodable = self
             .other
@@ -480,7 +480,7 @@ impl Fleet {
 
     /// Beacons per wall second each vessel sent (from their numbers and
     /// `t`) over the run: (least, most).
-    pub fn beacon_rates(&self) -> (f64, f64) {
+    pub(crate) fn beacon_rates(&self) -> (f64, f64) {
         let mut span: BTreeMap<&str, (f64, u64, f64, u64)> = BTreeMap::new();
         for r in self.unique_beacons() {
             let b = &r["beacon"];
@@ -505,7 +505,7 @@ impl Fleet {
 
     /// The share of the beacons sent with `t` in [from, to) (UTC) that
     /// the observers heard (each vessel's beacon numbers in that window).
-    pub fn delivery(&self, from: f64, to: f64) -> f64 {
+    pub(crate) fn delivery(&self, from: f64, to: f64) -> f64 {
         let mut seqs: BTreeMap<&str, BTreeSet<u64>> = BTreeMap::new();
         for r in &self.beacons {
             let b = &r["beacon"];
@@ -528,14 +528,14 @@ impl Fleet {
     }
 
     /// Each vessel's bytes on its link: (received, transmitted), host i.
-    pub fn bytes(&self) -> Vec<(u64, u64)> {
+    pub(crate) fn bytes(&self) -> Vec<(u64, u64)> {
         (1..=N).map(|i| self.medium.bytes(i)).collect()
     }
 
     /// SIGTERM to every vessel: each must exit 0 within 15 s. With
     /// SEACOVER_PEER_KEEP=DIR, the observers' records and the vessels' logs
     /// are copied to DIR (named by the fleet) for a closer look.
-    pub fn shutdown(&mut self, checks: &mut Checks) {
+    pub(crate) fn shutdown(&mut self, checks: &mut Checks) {
         if let Some(dir) = std::env::var_os("SEACOVER_PEER_KEEP") {
             let dir = PathBuf::from(dir);
             std::fs::create_dir_all(&dir).unwrap();
@@ -617,7 +617,7 @@ impl Fleet {
 /// that, plus the multiple of it nearest to what the clocks say (5 beacons
 /// per second of mission time, `warp` mission seconds per second): right
 /// across any gap while the vessel keeps its pace.
-pub fn unwrap_seq(n0: i64, seq0: i64, t0: f64, seq: i64, t: f64, warp: f64) -> i64 {
+pub(crate) fn unwrap_seq(n0: i64, seq0: i64, t0: f64, seq: i64, t: f64, warp: f64) -> i64 {
     let expected = (t - t0) * warp * BEACON_HZ;
     let d = (seq - seq0).rem_euclid(SEQ_MODULUS);
     let k = ((expected - d as f64) / SEQ_MODULUS as f64).round() as i64;
@@ -625,7 +625,7 @@ pub fn unwrap_seq(n0: i64, seq0: i64, t0: f64, seq: i64, t: f64, warp: f64) -> i
 }
 
 /// Why the beacon record `r` is not a documented beacon, if it is not.
-pub fn beacon_fault(r: &Value, keys: &BTreeSet<&str>, size: usize) -> Result<(), String> {
+pub(crate) fn beacon_fault(r: &Value, keys: &BTreeSet<&str>, size: usize) -> Result<(), String> {
     if size > MAX_BEACON {
         return Err(format!("{size} bytes > {MAX_BEACON}"));
     }
@@ -666,7 +666,7 @@ pub fn beacon_fault(r: &Value, keys: &BTreeSet<&str>, size: usize) -> Result<(),
 }
 
 /// The vessels a status document calls fresh (heard within stale_after).
-pub fn fresh(status: &Value) -> BTreeSet<String> {
+pub(crate) fn fresh(status: &Value) -> BTreeSet<String> {
     status["status"]["heard"]
         .as_object()
         .map(|h| {
@@ -678,7 +678,7 @@ pub fn fresh(status: &Value) -> BTreeSet<String> {
         .unwrap_or_default()
 }
 
-pub fn skip(test: &str) -> Option<PathBuf> {
+pub(crate) fn skip(test: &str) -> Option<PathBuf> {
     if !root_or_skip(test) {
         return None;
     }
@@ -687,7 +687,7 @@ pub fn skip(test: &str) -> Option<PathBuf> {
     Some(python)
 }
 
-pub fn approach_text(a: &Option<Approach>) -> String {
+pub(crate) fn approach_text(a: &Option<Approach>) -> String {
     match a {
         Some(a) => format!(
             "{:.2} m ({} and {}, {:.1} s of mission time in)",
@@ -697,7 +697,7 @@ pub fn approach_text(a: &Option<Approach>) -> String {
     }
 }
 
-pub fn check_safety(checks: &mut Checks, fleet: &Fleet, safety: f64) -> f64 {
+pub(crate) fn check_safety(checks: &mut Checks, fleet: &Fleet, safety: f64) -> f64 {
     let closest = fleet.closest_approach();
     let d = closest.as_ref().map_or(f64::NAN, |a| a.distance);
     checks.check(
@@ -710,7 +710,7 @@ pub fn check_safety(checks: &mut Checks, fleet: &Fleet, safety: f64) -> f64 {
     d
 }
 
-pub fn check_wire(checks: &mut Checks, fleet: &Fleet) -> (usize, usize) {
+pub(crate) fn check_wire(checks: &mut Checks, fleet: &Fleet) -> (usize, usize) {
     let (count, max_size, faults) = fleet.wire();
     checks.check(
         count > 0 && faults.is_empty(),

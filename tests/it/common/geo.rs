@@ -11,10 +11,10 @@ use geographiclib_rs::{DirectGeodesic, Geodesic, InverseGeodesic};
 use serde_json::{Value, json};
 
 /// An origin (lat, lon) in WGS84 degrees.
-pub type Origin = (f64, f64);
+pub(crate) type Origin = (f64, f64);
 
 /// (lat, lon) of the local point (x, y) of the plane at `origin`.
-pub fn place(origin: Origin, x: f64, y: f64) -> (f64, f64) {
+pub(crate) fn place(origin: Origin, x: f64, y: f64) -> (f64, f64) {
     let s = x.hypot(y);
     if s == 0.0 {
         return origin;
@@ -24,7 +24,7 @@ pub fn place(origin: Origin, x: f64, y: f64) -> (f64, f64) {
 
 /// (x, y) of a WGS84 position in the plane at `origin`: the inverse of
 /// [`place`].
-pub fn locate(origin: Origin, lat: f64, lon: f64) -> (f64, f64) {
+pub(crate) fn locate(origin: Origin, lat: f64, lon: f64) -> (f64, f64) {
     let (s, azimuth, _, _): (f64, f64, f64, f64) =
         Geodesic::wgs84().inverse(origin.0, origin.1, lat, lon);
     let a = azimuth.to_radians();
@@ -33,7 +33,7 @@ pub fn locate(origin: Origin, lat: f64, lon: f64) -> (f64, f64) {
 
 /// A local ring `[[x, y], …]` (not closed) as a closed GeoJSON ring of
 /// `[lon, lat]`.
-pub fn ring(origin: Origin, points: &Value) -> Value {
+pub(crate) fn ring(origin: Origin, points: &Value) -> Value {
     let mut out: Vec<Value> = points
         .as_array()
         .expect("a ring")
@@ -49,7 +49,7 @@ pub fn ring(origin: Origin, points: &Value) -> Value {
 
 /// A local region document `{polygon, holes}` as a GeoJSON Polygon
 /// geometry placed at `origin`.
-pub fn polygon(origin: Origin, region: &Value) -> Value {
+pub(crate) fn polygon(origin: Origin, region: &Value) -> Value {
     let mut rings = vec![ring(origin, &region["polygon"])];
     for hole in region["holes"].as_array().into_iter().flatten() {
         rings.push(ring(origin, hole));
@@ -58,7 +58,7 @@ pub fn polygon(origin: Origin, region: &Value) -> Value {
 }
 
 /// A local object or vessel `{x, y, …}` placed at `lat`, `lon` instead.
-pub fn at_lat_lon(origin: Origin, item: &Value) -> Value {
+pub(crate) fn at_lat_lon(origin: Origin, item: &Value) -> Value {
     let mut item = item.clone();
     let map = item.as_object_mut().expect("an object");
     let x = map.remove("x").unwrap().as_f64().unwrap();

@@ -15,7 +15,7 @@ use tokio_util::sync::CancellationToken;
 const STOP_WITHIN: Duration = Duration::from_secs(5);
 
 /// A running in-process coordinator.
-pub struct Server {
+pub(crate) struct Server {
     pub addr: SocketAddr,
     shutdown: CancellationToken,
     task: JoinHandle<Result<(), ServeError>>,
@@ -23,13 +23,13 @@ pub struct Server {
 
 impl Server {
     /// Serves `config` on 127.0.0.1, port 0.
-    pub async fn start(config: ServeConfig) -> Server {
+    pub(crate) async fn start(config: ServeConfig) -> Server {
         Server::start_on("127.0.0.1:0", config).await
     }
 
     /// Serves `config` on `bind` (e.g. a former address, to restart on the
     /// same port).
-    pub async fn start_on(bind: &str, config: ServeConfig) -> Server {
+    pub(crate) async fn start_on(bind: &str, config: ServeConfig) -> Server {
         let listener = TcpListener::bind(bind).await.unwrap();
         let addr = listener.local_addr().unwrap();
         let shutdown = CancellationToken::new();
@@ -42,27 +42,27 @@ impl Server {
     }
 
     /// `http://addr`.
-    pub fn base(&self) -> String {
+    pub(crate) fn base(&self) -> String {
         format!("http://{}", self.addr)
     }
 
     /// `http://addr` followed by `path`.
-    pub fn http(&self, path: &str) -> String {
+    pub(crate) fn http(&self, path: &str) -> String {
         format!("http://{}{path}", self.addr)
     }
 
     /// The vessel link's URL.
-    pub fn ws(&self) -> String {
+    pub(crate) fn ws(&self) -> String {
         format!("ws://{}/api/v1/vessels/link", self.addr)
     }
 
     /// The server's shutdown token (a clone), for clients that stop with it.
-    pub fn shutdown(&self) -> CancellationToken {
+    pub(crate) fn shutdown(&self) -> CancellationToken {
         self.shutdown.clone()
     }
 
     /// Cancels; `serve` must return `Ok` within 5 s.
-    pub async fn stop(self) {
+    pub(crate) async fn stop(self) {
         self.shutdown.cancel();
         tokio::time::timeout(STOP_WITHIN, self.task)
             .await
@@ -72,13 +72,13 @@ impl Server {
     }
 
     /// Cancels; `serve` must return `Ok`, however long it takes.
-    pub async fn stop_unbounded(self) {
+    pub(crate) async fn stop_unbounded(self) {
         self.shutdown.cancel();
         self.task.await.unwrap().unwrap();
     }
 
     /// Cancels and waits up to 5 s for `serve`, whatever it returns.
-    pub async fn stop_ignoring_result(self) {
+    pub(crate) async fn stop_ignoring_result(self) {
         self.shutdown.cancel();
         let _ = tokio::time::timeout(STOP_WITHIN, self.task).await;
     }

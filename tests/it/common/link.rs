@@ -7,7 +7,7 @@ use serde_json::{Value, json};
 use tokio_tungstenite::tungstenite::Message;
 
 /// Opens a link to `url` as vessel `id` and waits for its welcome.
-pub async fn hello(
+pub(crate) async fn hello(
     url: String,
     id: &str,
 ) -> (
@@ -30,7 +30,7 @@ pub async fn hello(
 }
 
 /// The next text frame as JSON; `null` once the link is closed.
-pub async fn next_json(
+pub(crate) async fn next_json(
     stream: &mut (impl StreamExt<Item = Result<Message, tokio_tungstenite::tungstenite::Error>> + Unpin),
 ) -> Value {
     loop {

@@ -10,9 +10,9 @@
 //! runs at a time, beside tests that keep one core busy at most.
 
 /// Held by each heavy test for as long as its processes run.
-pub static HEAVY: tokio::sync::Mutex<()> = tokio::sync::Mutex::const_new(());
+pub(crate) static HEAVY: tokio::sync::Mutex<()> = tokio::sync::Mutex::const_new(());
 
 /// [`HEAVY`], from a test that is not async.
-pub fn heavy() -> tokio::sync::MutexGuard<'static, ()> {
+pub(crate) fn heavy() -> tokio::sync::MutexGuard<'static, ()> {
     HEAVY.blocking_lock()
 }

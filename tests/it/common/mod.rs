@@ -9,15 +9,15 @@
 //! root), hence `dead_code` is allowed.
 #![allow(dead_code)]
 
-pub mod browser;
-pub mod fleet;
-pub mod geo;
-pub mod inprocess;
-pub mod link;
-pub mod machine;
-pub mod netns;
-pub mod paper;
-pub mod peer;
-pub mod process;
-pub mod server;
-pub mod sitl;
+pub(crate) mod browser;
+pub(crate) mod fleet;
+pub(crate) mod geo;
+pub(crate) mod inprocess;
+pub(crate) mod link;
+pub(crate) mod machine;
+pub(crate) mod netns;
+pub(crate) mod paper;
+pub(crate) mod peer;
+pub(crate) mod process;
+pub(crate) mod server;
+pub(crate) mod sitl;

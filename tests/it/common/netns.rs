@@ -73,7 +73,7 @@ static NEXT: AtomicUsize = AtomicUsize::new(0);
 /// Whether this process can create network namespaces (uid 0 and
 /// iproute2's `ip`). Otherwise prints "skipped: <test> needs root to create
 /// network namespaces" and returns false, or panics under CI=true.
-pub fn root_or_skip(test: &str) -> bool {
+pub(crate) fn root_or_skip(test: &str) -> bool {
     let root = uid() == Some(0);
     let ip = Command::new("ip")
         .arg("-V")
@@ -176,7 +176,7 @@ fn our_namespaces() -> Vec<String> {
 /// Deletes the namespaces left by earlier runs that crashed: `scnet-<pid>-…`
 /// whose process `pid` is no longer alive. Namespaces of live processes
 /// (this one and parallel test runs) are left alone.
-pub fn cleanup_stale() {
+pub(crate) fn cleanup_stale() {
     for ns in our_namespaces() {
         let pid: Option<u32> = ns[PREFIX.len()..]
             .split('-')
@@ -192,7 +192,7 @@ pub fn cleanup_stale() {
 
 /// A radio medium with its hosts: see the module doc. Dropping it deletes
 /// every namespace it made.
-pub struct Medium {
+pub(crate) struct Medium {
     medium: String,
     hosts: Vec<String>,
     /// The third octet of the hosts' addresses.
@@ -203,7 +203,7 @@ pub struct Medium {
 
 impl Medium {
     /// A medium with `hosts` hosts (1 to 250), all linked and up.
-    pub fn new(hosts: usize) -> Medium {
+    pub(crate) fn new(hosts: usize) -> Medium {
         assert!(
             (1..=250).contains(&hosts),
             "Medium::new({hosts}): 1 to 250 hosts"
@@ -299,22 +299,22 @@ impl Medium {
     }
 
     /// The number of hosts.
-    pub fn host_count(&self) -> usize {
+    pub(crate) fn host_count(&self) -> usize {
         self.hosts.len()
     }
 
     /// The medium's namespace (the bridge's), for inspection.
-    pub fn medium_ns(&self) -> &str {
+    pub(crate) fn medium_ns(&self) -> &str {
         &self.medium
     }
 
     /// Host `i`'s namespace.
-    pub fn host_ns(&self, i: usize) -> &str {
+    pub(crate) fn host_ns(&self, i: usize) -> &str {
         &self.hosts[i]
     }
 
     /// Host `i`'s IPv4 address (without the prefix length).
-    pub fn ip(&self, i: usize) -> String {
+    pub(crate) fn ip(&self, i: usize) -> String {
         assert!(i < self.hosts.len(), "no host {i}");
         format!("10.77.{}.{}", self.subnet, i + 1)
     }
@@ -322,7 +322,7 @@ impl Medium {
     /// `program` to be run inside host `i`'s namespace (`ip netns exec`,
     /// which execs it: the child's pid is the program's); the environment
     /// is inherited. The caller adds the arguments and owns the child.
-    pub fn command(&self, i: usize, program: impl AsRef<std::ffi::OsStr>) -> Command {
+    pub(crate) fn command(&self, i: usize, program: impl AsRef<std::ffi::OsStr>) -> Command {
         let mut c = Command::new("ip");
         c.args(["netns", "exec", self.host_ns(i)]).arg(program);
         c
@@ -360,7 +360,7 @@ impl Medium {
     /// Hosts in different groups can no longer exchange any packet (both
     /// directions); hosts in no group are not affected. Replaces the
     /// previous partition.
-    pub fn partition(&self, groups: &[Vec<usize>]) {
+    pub(crate) fn partition(&self, groups: &[Vec<usize>]) {
         let mut rules = Vec::new();
         for (g, group) in groups.iter().enumerate() {
             for other in &groups[g + 1..] {
@@ -375,14 +375,14 @@ impl Medium {
     }
 
     /// Removes the partition.
-    pub fn heal(&self) {
+    pub(crate) fn heal(&self) {
         self.set_chain(PARTITION, &[]);
     }
 
     /// Drops all packets between each given pair of hosts, replacing the
     /// previous set of cut pairs (`&[]` removes them): a range-limited radio,
     /// updated by the caller as the vessels move. One process per update.
-    pub fn cut_pairs(&self, pairs: &[(usize, usize)]) {
+    pub(crate) fn cut_pairs(&self, pairs: &[(usize, usize)]) {
         let rules: Vec<String> = pairs
             .iter()
             .flat_map(|&(a, b)| self.drop_between(a, b))
@@ -392,7 +392,7 @@ impl Medium {
 
     /// Every forwarded packet is dropped with probability `p`, independently
     /// (`-m statistic --mode random`); `loss(0.0)` removes the loss.
-    pub fn loss(&self, p: f64) {
+    pub(crate) fn loss(&self, p: f64) {
         assert!((0.0..=1.0).contains(&p), "loss({p}): a probability");
         let rules = if p > 0.0 {
             vec![format!(
@@ -410,7 +410,7 @@ impl Medium {
     /// Burst: 20 ms at the rate, at least 1600 bytes (a full Ethernet frame
     /// must fit); latency 200 ms (a packet that would queue longer is
     /// dropped). Replaces the previous limit.
-    pub fn limit(&self, kbit: u32) {
+    pub(crate) fn limit(&self, kbit: u32) {
         assert!(kbit > 0, "limit(0): use unlimit()");
         let burst = (u64::from(kbit) * 1000 / 8 / 50).max(1600);
         let tbf = |dev: &str| {
@@ -429,7 +429,7 @@ impl Medium {
     }
 
     /// Removes the bandwidth limit (a no-op without one).
-    pub fn unlimit(&self) {
+    pub(crate) fn unlimit(&self) {
         if !self.limited.swap(false, Ordering::SeqCst) {
             return;
         }
@@ -443,7 +443,7 @@ impl Medium {
     }
 
     /// Host `i`'s `eth0` byte counters: (received, transmitted).
-    pub fn bytes(&self, i: usize) -> (u64, u64) {
+    pub(crate) fn bytes(&self, i: usize) -> (u64, u64) {
         let dir = "/sys/class/net/eth0/statistics";
         let out = run_in(
             self.host_ns(i),

@@ -9,27 +9,27 @@ use std::sync::OnceLock;
 
 use serde_json::{Value, json};
 
-pub const BIN: &str = env!("CARGO_BIN_EXE_seacover");
+pub(crate) const BIN: &str = env!("CARGO_BIN_EXE_seacover");
 /// The paper's scenario: the mission file, and the vessels' starts.
-pub const PAPER: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/paper.json");
+pub(crate) const PAPER: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/paper.json");
 /// Mission seconds per wall second for every test but g's. Each vessel
 /// simulates its hull at 1 kHz of mission time: eight of them at 10 took
 /// about 1.2 of a 2-core machine's cores in a debug build, about 0.7 in the
 /// optimized test profile (measured with top), the observers a little.
-pub const WARP: f64 = 10.0;
+pub(crate) const WARP: f64 = 10.0;
 /// Beacons per second of mission time (the documented rate).
-pub const BEACON_HZ: f64 = 5.0;
+pub(crate) const BEACON_HZ: f64 = 5.0;
 /// A neighbour silent longer than this leaves a vessel's partition [s of
 /// mission time] (the documented default).
-pub const STALE_AFTER: f64 = 3.0;
+pub(crate) const STALE_AFTER: f64 = 3.0;
 /// The vessels, usv-1 … usv-8, in hosts 1 … 8.
-pub const N: usize = 8;
+pub(crate) const N: usize = 8;
 /// The documented largest beacon payload [bytes].
-pub const MAX_BEACON: usize = 96;
+pub(crate) const MAX_BEACON: usize = 96;
 /// `seq` counts a vessel's beacons modulo this (documented).
-pub const SEQ_MODULUS: i64 = 256;
+pub(crate) const SEQ_MODULUS: i64 = 256;
 /// The documented keys of a beacon.
-pub const BEACON_KEYS: [&str; 13] = [
+pub(crate) const BEACON_KEYS: [&str; 13] = [
     "id",
     "seq",
     "t",
@@ -48,7 +48,7 @@ pub const BEACON_KEYS: [&str; 13] = [
 // ---------------------------------------------------------------------------
 // The scenario, evaluation and the centralized reference.
 
-pub fn paper() -> &'static Value {
+pub(crate) fn paper() -> &'static Value {
     static PAPER_DOC: OnceLock<Value> = OnceLock::new();
     PAPER_DOC.get_or_init(|| {
         let text = std::fs::read_to_string(PAPER).unwrap_or_else(|e| panic!("{PAPER}: {e}"));
@@ -58,20 +58,20 @@ pub fn paper() -> &'static Value {
 
 /// A vessel's position (and heading) in the mission's plane.
 #[derive(Debug, Clone)]
-pub struct Pos {
+pub(crate) struct Pos {
     pub id: String,
     pub x: f64,
     pub y: f64,
     pub psi: f64,
 }
 
-pub fn num(v: &Value, what: &str) -> f64 {
+pub(crate) fn num(v: &Value, what: &str) -> f64 {
     v.as_f64()
         .unwrap_or_else(|| panic!("{what}: not a number: {v}"))
 }
 
 /// The paper's vessels where they start.
-pub fn starts() -> Vec<Pos> {
+pub(crate) fn starts() -> Vec<Pos> {
     let vessels = paper()["vessels"].as_array().expect("paper.json: vessels");
     assert_eq!(vessels.len(), N, "paper.json: {N} vessels");
     vessels
@@ -87,7 +87,7 @@ pub fn starts() -> Vec<Pos> {
 
 /// Runs `program args…` with `input` on its stdin; its stdout, or a panic
 /// naming it and its stderr.
-pub fn run_stdin(program: &str, args: &[&str], input: &str) -> String {
+pub(crate) fn run_stdin(program: &str, args: &[&str], input: &str) -> String {
     use std::io::Write;
     let mut child = Command::new(program)
         .args(args)
@@ -113,20 +113,20 @@ pub fn run_stdin(program: &str, args: &[&str], input: &str) -> String {
 }
 
 /// What `seacover evaluate` says of a fleet at some positions.
-pub struct Evaluation {
+pub(crate) struct Evaluation {
     pub h: f64,
     pub centroids: BTreeMap<String, (f64, f64)>,
 }
 
 /// `seacover evaluate` on the paper's region and risk with the vessels
 /// `at` (each with its actuator from the paper).
-pub fn evaluate(at: &[Pos]) -> Evaluation {
+pub(crate) fn evaluate(at: &[Pos]) -> Evaluation {
     evaluate_in(paper(), at)
 }
 
 /// [`evaluate`] in another mission: `base` is the paper's scenario with
 /// its region and risk replaced (by [`with_mission`]).
-pub fn evaluate_in(base: &Value, at: &[Pos]) -> Evaluation {
+pub(crate) fn evaluate_in(base: &Value, at: &[Pos]) -> Evaluation {
     let mut doc = base.clone();
     let actuators: BTreeMap<String, (f64, f64)> = paper()["vessels"]
         .as_array()
@@ -169,12 +169,12 @@ pub fn evaluate_in(base: &Value, at: &[Pos]) -> Evaluation {
 }
 
 /// H at `at`, and each vessel's distance to its own cell's centroid (E).
-pub fn coverage(at: &[Pos]) -> (f64, BTreeMap<String, f64>) {
+pub(crate) fn coverage(at: &[Pos]) -> (f64, BTreeMap<String, f64>) {
     coverage_in(paper(), at)
 }
 
 /// [`coverage`] in another mission (see [`evaluate_in`]).
-pub fn coverage_in(base: &Value, at: &[Pos]) -> (f64, BTreeMap<String, f64>) {
+pub(crate) fn coverage_in(base: &Value, at: &[Pos]) -> (f64, BTreeMap<String, f64>) {
     let eval = evaluate_in(base, at);
     let e = at
         .iter()
@@ -186,19 +186,19 @@ pub fn coverage_in(base: &Value, at: &[Pos]) -> (f64, BTreeMap<String, f64>) {
     (eval.h, e)
 }
 
-pub fn max_of(e: &BTreeMap<String, f64>) -> f64 {
+pub(crate) fn max_of(e: &BTreeMap<String, f64>) -> f64 {
     e.values().copied().fold(0.0, f64::max)
 }
 
 /// The optimum Lloyd's iteration reaches from `at` (every vessel moved to
 /// its cell's centroid until none moves 1 mm), by `seacover evaluate`: H
 /// there, the number of iterations and the vessels there.
-pub fn lloyd(at: &[Pos]) -> (f64, usize, Vec<Pos>) {
+pub(crate) fn lloyd(at: &[Pos]) -> (f64, usize, Vec<Pos>) {
     lloyd_in(paper(), at)
 }
 
 /// [`lloyd`] in another mission (see [`evaluate_in`]).
-pub fn lloyd_in(base: &Value, at: &[Pos]) -> (f64, usize, Vec<Pos>) {
+pub(crate) fn lloyd_in(base: &Value, at: &[Pos]) -> (f64, usize, Vec<Pos>) {
     let mut at = at.to_vec();
     for i in 1..=2000 {
         let eval = evaluate_in(base, &at);
@@ -218,7 +218,7 @@ pub fn lloyd_in(base: &Value, at: &[Pos]) -> (f64, usize, Vec<Pos>) {
 /// Lloyd's iteration of `at` among `held`, who keep their places (a group
 /// that keeps to its own water, docs/peer.md): H of all there, the
 /// iterations, and where `at` ends.
-pub fn lloyd_among(at: &[Pos], held: &[Pos]) -> (f64, usize, Vec<Pos>) {
+pub(crate) fn lloyd_among(at: &[Pos], held: &[Pos]) -> (f64, usize, Vec<Pos>) {
     let mut all: Vec<Pos> = [at, held].concat();
     for i in 1..=2000 {
         let eval = evaluate(&all);
@@ -239,7 +239,7 @@ pub fn lloyd_among(at: &[Pos], held: &[Pos]) -> (f64, usize, Vec<Pos>) {
 
 /// The final H of `seacover sim --scenario paper` (200 s, safety on), run
 /// once per test process.
-pub fn centralized_h() -> f64 {
+pub(crate) fn centralized_h() -> f64 {
     static H: OnceLock<f64> = OnceLock::new();
     *H.get_or_init(|| {
         let dir = tempfile::tempdir().unwrap();
@@ -260,20 +260,20 @@ pub fn centralized_h() -> f64 {
 // ---------------------------------------------------------------------------
 // Checks collected, so that one run reports every number.
 
-pub struct Checks {
+pub(crate) struct Checks {
     pub test: String,
     pub failed: Vec<String>,
 }
 
 impl Checks {
-    pub fn new(test: &str) -> Checks {
+    pub(crate) fn new(test: &str) -> Checks {
         Checks {
             test: test.to_string(),
             failed: Vec::new(),
         }
     }
 
-    pub fn check(&mut self, ok: bool, what: impl Into<String>) {
+    pub(crate) fn check(&mut self, ok: bool, what: impl Into<String>) {
         let what = what.into();
         eprintln!(
             "{}: {} {what}",
@@ -285,7 +285,7 @@ impl Checks {
         }
     }
 
-    pub fn finish(self) {
+    pub(crate) fn finish(self) {
         assert!(
             self.failed.is_empty(),
             "{}: {} check(s) failed:\n- {}",
@@ -299,7 +299,7 @@ impl Checks {
 /// The paper's scenario with the region and risk of `mission` (a mission
 /// document as `GET /api/v1/mission` gives it): the same vessels and
 /// actuators, for [`evaluate_in`].
-pub fn with_mission(mission: &Value) -> Value {
+pub(crate) fn with_mission(mission: &Value) -> Value {
     let mut doc = paper().clone();
     for key in ["region", "risk"] {
         doc[key] = mission[key].clone();

@@ -22,12 +22,12 @@ use super::netns::Medium;
 use super::process::{KillOnDrop, signal, venv_python};
 
 /// The observer script.
-pub const OBSERVER: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/it/peer/observer.py");
+pub(crate) const OBSERVER: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/it/peer/observer.py");
 /// The injector script.
-pub const INJECT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/it/peer/inject.py");
+pub(crate) const INJECT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/it/peer/inject.py");
 
 /// The interpreter with `zenoh` and `cbor2` (see [`venv_python`]).
-pub fn python_or_skip(test: &str) -> Option<PathBuf> {
+pub(crate) fn python_or_skip(test: &str) -> Option<PathBuf> {
     venv_python(
         test,
         &["zenoh", "cbor2"],
@@ -36,7 +36,7 @@ pub fn python_or_skip(test: &str) -> Option<PathBuf> {
 }
 
 /// The UTC time in seconds, as the tools write it.
-pub fn now() -> f64 {
+pub(crate) fn now() -> f64 {
     SystemTime::now()
         .duration_since(UNIX_EPOCH)
         .unwrap()
@@ -45,7 +45,7 @@ pub fn now() -> f64 {
 
 /// Polls `check` every 100 ms until it gives a value; panics after `secs`
 /// seconds naming `what`.
-pub fn wait_for<T>(secs: f64, what: &str, mut check: impl FnMut() -> Option<T>) -> T {
+pub(crate) fn wait_for<T>(secs: f64, what: &str, mut check: impl FnMut() -> Option<T>) -> T {
     let deadline = Instant::now() + Duration::from_secs_f64(secs);
     loop {
         if let Some(v) = check() {
@@ -59,7 +59,7 @@ pub fn wait_for<T>(secs: f64, what: &str, mut check: impl FnMut() -> Option<T>) 
 /// Starts `cmd` (stdout piped, stderr inherited) and waits up to `secs`
 /// seconds for its `ready` line; the rest of its stdout is copied to the
 /// test's stderr, prefixed with `what`.
-pub fn start_ready(mut cmd: Command, what: &str, secs: u64) -> KillOnDrop {
+pub(crate) fn start_ready(mut cmd: Command, what: &str, secs: u64) -> KillOnDrop {
     let mut child = KillOnDrop(
         cmd.stdin(Stdio::null())
             .stdout(Stdio::piped())
@@ -91,7 +91,7 @@ pub fn start_ready(mut cmd: Command, what: &str, secs: u64) -> KillOnDrop {
 
 /// Sends SIGTERM to `child` and waits up to `secs` seconds for it to exit
 /// with status 0.
-pub fn terminate(child: &mut KillOnDrop, what: &str, secs: u64) {
+pub(crate) fn terminate(child: &mut KillOnDrop, what: &str, secs: u64) {
     signal(child.0.id(), "-TERM");
     let status = wait_for(secs as f64, &format!("{what} exits on SIGTERM"), || {
         child.0.try_wait().unwrap()
@@ -101,7 +101,7 @@ pub fn terminate(child: &mut KillOnDrop, what: &str, secs: u64) {
 
 /// The observer, running in one host of a medium, writing to a file of its
 /// own.
-pub struct Observer {
+pub(crate) struct Observer {
     pub child: KillOnDrop,
     pub out: PathBuf,
     _dir: tempfile::TempDir,
@@ -110,7 +110,13 @@ pub struct Observer {
 impl Observer {
     /// Starts the observer in host `host` for fleet `fleet` (more options in
     /// `args`, e.g. `--connect`), and waits until it is ready.
-    pub fn start(medium: &Medium, host: usize, python: &Path, fleet: &str, args: &[&str]) -> Self {
+    pub(crate) fn start(
+        medium: &Medium,
+        host: usize,
+        python: &Path,
+        fleet: &str,
+        args: &[&str],
+    ) -> Self {
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().join("observed.jsonl");
         let mut cmd = medium.command(host, python);
@@ -127,7 +133,7 @@ impl Observer {
     }
 
     /// Every complete line written so far, parsed.
-    pub fn records(&self) -> Vec<Value> {
+    pub(crate) fn records(&self) -> Vec<Value> {
         let text = std::fs::read_to_string(&self.out).unwrap_or_default();
         let complete = text.rfind('\n').map_or("", |i| &text[..i]);
         complete
@@ -140,7 +146,7 @@ impl Observer {
     }
 
     /// The records of `kind` (`beacon`, `alive`, …).
-    pub fn of_kind(&self, kind: &str) -> Vec<Value> {
+    pub(crate) fn of_kind(&self, kind: &str) -> Vec<Value> {
         self.records()
             .into_iter()
             .filter(|r| r["kind"] == kind)
@@ -148,7 +154,7 @@ impl Observer {
     }
 
     /// A reader of this observer's records as they come (see [`Tail`]).
-    pub fn tail(&self) -> Tail {
+    pub(crate) fn tail(&self) -> Tail {
         Tail {
             path: self.out.clone(),
             offset: 0,
@@ -157,7 +163,7 @@ impl Observer {
 
     /// Stops the observer with SIGTERM (it must exit 0) and returns every
     /// record.
-    pub fn stop(mut self) -> Vec<Value> {
+    pub(crate) fn stop(mut self) -> Vec<Value> {
         terminate(&mut self.child, "observer", 15);
         self.records()
     }
@@ -166,14 +172,14 @@ impl Observer {
 /// Reads an observer's file as it grows: each [`Tail::read`] parses only
 /// the complete lines written since the previous call (a long run's file
 /// is never read twice).
-pub struct Tail {
+pub(crate) struct Tail {
     path: PathBuf,
     offset: u64,
 }
 
 impl Tail {
     /// The records of the complete lines written since the previous call.
-    pub fn read(&mut self) -> Vec<Value> {
+    pub(crate) fn read(&mut self) -> Vec<Value> {
         use std::io::{Read, Seek, SeekFrom};
         let Ok(mut file) = std::fs::File::open(&self.path) else {
             return Vec::new();

@@ -6,7 +6,7 @@ use std::process::{Child, Command, Stdio};
 
 /// Sends `sig` (as `kill` takes it: `-TERM`, `-KILL`, `-STOP`, …) to `pid`
 /// and asserts that `kill` succeeded.
-pub fn signal(pid: u32, sig: &str) {
+pub(crate) fn signal(pid: u32, sig: &str) {
     let status = Command::new("kill")
         .args([sig, &pid.to_string()])
         .status()
@@ -15,7 +15,7 @@ pub fn signal(pid: u32, sig: &str) {
 }
 
 /// A child process, killed and waited for when dropped.
-pub struct KillOnDrop(pub Child);
+pub(crate) struct KillOnDrop(pub Child);
 
 impl Drop for KillOnDrop {
     fn drop(&mut self) {
@@ -28,7 +28,7 @@ impl Drop for KillOnDrop {
 /// if it imports every one of `modules`. `None` (after "skipped: <test>
 /// needs <what>") without one, except under CI=true, where that panics:
 /// scripts/test makes the venv.
-pub fn venv_python(test: &str, modules: &[&str], what: &str) -> Option<PathBuf> {
+pub(crate) fn venv_python(test: &str, modules: &[&str], what: &str) -> Option<PathBuf> {
     let candidates = [
         std::env::var_os("SEACOVER_PYTHON").map(PathBuf::from),
         Some(PathBuf::from(concat!(

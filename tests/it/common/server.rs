@@ -8,7 +8,7 @@ use std::time::Duration;
 use seacover::protocol::MissionDocument;
 
 /// `seacover serve` on port 0 with this data directory and configuration.
-pub fn serve_command(data: &Path, config: &Path) -> Command {
+pub(crate) fn serve_command(data: &Path, config: &Path) -> Command {
     let mut command = Command::new(env!("CARGO_BIN_EXE_seacover"));
     command
         .args(["serve", "--bind", "127.0.0.1:0", "--data-dir"])
@@ -21,7 +21,7 @@ pub fn serve_command(data: &Path, config: &Path) -> Command {
 
 /// `seacover serve` on port 0 with this data directory, the built-in
 /// mission and no recording; stdout piped for [`start`].
-pub fn serve_unrecorded(data: &Path) -> Command {
+pub(crate) fn serve_unrecorded(data: &Path) -> Command {
     let mut command = Command::new(env!("CARGO_BIN_EXE_seacover"));
     command
         .args([
@@ -37,13 +37,13 @@ pub fn serve_unrecorded(data: &Path) -> Command {
 }
 
 /// Starts `command` and returns it with the address it printed.
-pub fn start(command: Command) -> (Child, String) {
+pub(crate) fn start(command: Command) -> (Child, String) {
     start_saying(command, "seacover: serving on")
 }
 
 /// Starts `command`, whose first line must begin with `first`, and returns
 /// it with the address that line ends with.
-pub fn start_saying(mut command: Command, first: &str) -> (Child, String) {
+pub(crate) fn start_saying(mut command: Command, first: &str) -> (Child, String) {
     let mut child = command.spawn().unwrap();
     let mut line = String::new();
     BufReader::new(child.stdout.take().unwrap())
@@ -55,23 +55,26 @@ pub fn start_saying(mut command: Command, first: &str) -> (Child, String) {
 }
 
 /// Starts the real binary on port 0 and returns it with its address.
-pub fn spawn_server(data: &Path, config: &Path) -> (Child, String) {
+pub(crate) fn spawn_server(data: &Path, config: &Path) -> (Child, String) {
     let mut command = serve_command(data, config);
     command.stderr(Stdio::null());
     start(command)
 }
 
 /// GETs `url` and decodes its JSON body, unwrapping both.
-pub async fn get_json<T: serde::de::DeserializeOwned>(http: &reqwest::Client, url: &str) -> T {
+pub(crate) async fn get_json<T: serde::de::DeserializeOwned>(
+    http: &reqwest::Client,
+    url: &str,
+) -> T {
     http.get(url).send().await.unwrap().json().await.unwrap()
 }
 
-pub async fn mission(http: &reqwest::Client, addr: &str) -> MissionDocument {
+pub(crate) async fn mission(http: &reqwest::Client, addr: &str) -> MissionDocument {
     get_json(http, &format!("http://{addr}/api/v1/mission")).await
 }
 
 /// `GET /metrics` of the coordinator at `addr`, as text.
-pub async fn metrics(http: &reqwest::Client, addr: &str) -> String {
+pub(crate) async fn metrics(http: &reqwest::Client, addr: &str) -> String {
     let response = http.get(format!("http://{addr}/metrics")).send().await;
     response.unwrap().text().await.unwrap()
 }
@@ -79,7 +82,7 @@ pub async fn metrics(http: &reqwest::Client, addr: &str) -> String {
 /// A metric's value in `/metrics` text: the sum of the samples on every
 /// line that starts with `name` (a name, or a name and the start of its
 /// labels) and contains `label`.
-pub fn metric_sum(text: &str, name: &str, label: &str) -> f64 {
+pub(crate) fn metric_sum(text: &str, name: &str, label: &str) -> f64 {
     text.lines()
         .filter(|l| l.starts_with(name) && l.contains(label))
         .filter_map(|l| l.rsplit(' ').next()?.parse::<f64>().ok())
@@ -87,7 +90,7 @@ pub fn metric_sum(text: &str, name: &str, label: &str) -> f64 {
 }
 
 /// Polls `check` every 100 ms for up to `secs`.
-pub async fn eventually<F, Fut>(secs: u64, what: &str, mut check: F)
+pub(crate) async fn eventually<F, Fut>(secs: u64, what: &str, mut check: F)
 where
     F: FnMut() -> Fut,
     Fut: std::future::Future<Output = bool>,
@@ -102,13 +105,13 @@ where
 /// `seacover sim` of the paper's scenario for 6 s, recorded: its figures
 /// and CSV in `dir/name`, the recording in `dir/name-recording/`, whose
 /// one file it returns.
-pub fn record_sim(dir: &Path, name: &str) -> PathBuf {
+pub(crate) fn record_sim(dir: &Path, name: &str) -> PathBuf {
     record_scenario(dir, name, Path::new("paper"), 6.0)
 }
 
 /// `seacover sim --scenario SCENARIO` (built-in name or file) for
 /// `seconds`, recorded as [`record_sim`] does.
-pub fn record_scenario(dir: &Path, name: &str, scenario: &Path, seconds: f64) -> PathBuf {
+pub(crate) fn record_scenario(dir: &Path, name: &str, scenario: &Path, seconds: f64) -> PathBuf {
     let recordings = dir.join(format!("{name}-recording"));
     let ok = Command::new(env!("CARGO_BIN_EXE_seacover"))
         .args(["sim", "--no-figures", "--duration", &seconds.to_string()])

@@ -24,19 +24,19 @@ use mavlink::dialects::ardupilotmega::{
 use mavlink::{AsyncMavConnection, MavHeader};
 
 /// The boats' clock against the wall clock (SITL's `--speedup`).
-pub const SPEEDUP: u32 = 4;
+pub(crate) const SPEEDUP: u32 = 4;
 /// The mission's origin: ArduPilot's test field at Canberra.
-pub const ORIGIN: (f64, f64) = (-35.363261, 149.165230);
+pub(crate) const ORIGIN: (f64, f64) = (-35.363261, 149.165230);
 /// One SITL fleet at a time (their ports are fixed), and nothing else
 /// heavy beside it: the machine's lock ([`super::machine`]).
-pub static SITL: &tokio::sync::Mutex<()> = &super::machine::HEAVY;
+pub(crate) static SITL: &tokio::sync::Mutex<()> = &super::machine::HEAVY;
 
-pub struct Ardupilot {
+pub(crate) struct Ardupilot {
     pub binary: PathBuf,
     pub defaults: String,
 }
 
-pub fn ardupilot() -> Option<Ardupilot> {
+pub(crate) fn ardupilot() -> Option<Ardupilot> {
     let binary = match std::env::var_os("ARDUPILOT_SITL") {
         Some(p) => PathBuf::from(p),
         None => Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/ardupilot/ardurover"),
@@ -77,7 +77,7 @@ pub fn ardupilot() -> Option<Ardupilot> {
 }
 
 /// A running SITL boat.
-pub struct Boat {
+pub(crate) struct Boat {
     pub child: Child,
     pub sysid: u8,
     /// The bridge's port (SITL's SERIAL0).
@@ -96,7 +96,7 @@ impl Drop for Boat {
 
 /// SITL instance numbers (ports 5760 + 10 I and 5762 + 10 I), taken from a
 /// range no default SITL uses, skipping any whose ports are busy.
-pub fn instance() -> u32 {
+pub(crate) fn instance() -> u32 {
     static NEXT: AtomicU32 = AtomicU32::new(40);
     loop {
         let i = NEXT.fetch_add(1, Ordering::Relaxed);
@@ -109,7 +109,7 @@ pub fn instance() -> u32 {
 
 /// Starts boat `sysid` at `home` (lat, lon) heading `heading_deg`, as
 /// `start-boats` does.
-pub fn boat(ap: &Ardupilot, sysid: u8, home: (f64, f64), heading_deg: f64) -> Boat {
+pub(crate) fn boat(ap: &Ardupilot, sysid: u8, home: (f64, f64), heading_deg: f64) -> Boat {
     let i = instance();
     let dir = tempfile::tempdir().unwrap();
     let child = Command::new(&ap.binary)
@@ -140,18 +140,18 @@ pub fn boat(ap: &Ardupilot, sysid: u8, home: (f64, f64), heading_deg: f64) -> Bo
 
 /// The point `distance` m from the origin on bearing `azimuth` (degrees
 /// clockwise from north), by geographiclib.
-pub fn place(distance: f64, azimuth: f64) -> (f64, f64) {
+pub(crate) fn place(distance: f64, azimuth: f64) -> (f64, f64) {
     let a = azimuth.to_radians();
     crate::common::geo::place(ORIGIN, distance * a.sin(), distance * a.cos())
 }
 
 /// East and north [m] of a WGS84 position from the origin, by geographiclib.
-pub fn east_north(lat: f64, lon: f64) -> (f64, f64) {
+pub(crate) fn east_north(lat: f64, lon: f64) -> (f64, f64) {
     crate::common::geo::locate(ORIGIN, lat, lon)
 }
 
 /// `seacover agent --mavlink …` as a process, its JSON log collected.
-pub struct Bridge {
+pub(crate) struct Bridge {
     pub child: Child,
     pub log: Arc<Mutex<Vec<serde_json::Value>>>,
 }
@@ -159,7 +159,7 @@ pub struct Bridge {
 impl Bridge {
     /// A bridge of `endpoints` onto the coordinator at `server`, with
     /// `--arm`.
-    pub fn start(server: &str, endpoints: &[String]) -> Bridge {
+    pub(crate) fn start(server: &str, endpoints: &[String]) -> Bridge {
         let mut args: Vec<String> = ["--server", server, "--arm"].map(String::from).to_vec();
         for e in endpoints {
             args.extend(["--mavlink".to_string(), e.clone()]);
@@ -168,7 +168,7 @@ impl Bridge {
     }
 
     /// `seacover --log-format json agent ARGS…` at `RUST_LOG=info`.
-    pub fn agent(args: &[String]) -> Bridge {
+    pub(crate) fn agent(args: &[String]) -> Bridge {
         let mut command = Command::new(env!("CARGO_BIN_EXE_seacover"));
         command
             .args(["--log-format", "json", "agent"])
@@ -192,7 +192,7 @@ impl Bridge {
     }
 
     /// SIGTERM, then the log's last "bridge stopped" line's fields.
-    pub fn stop(mut self) -> serde_json::Value {
+    pub(crate) fn stop(mut self) -> serde_json::Value {
         crate::common::process::signal(self.child.id(), "-TERM");
         let exit = self.child.wait().unwrap();
         assert!(exit.success(), "the bridge exited with {exit}");
@@ -210,7 +210,7 @@ impl Bridge {
     }
 
     /// The log lines whose message starts with `prefix`.
-    pub fn logged(&self, prefix: &str) -> Vec<serde_json::Value> {
+    pub(crate) fn logged(&self, prefix: &str) -> Vec<serde_json::Value> {
         self.log
             .lock()
             .unwrap()
@@ -233,7 +233,7 @@ impl Drop for Bridge {
 }
 
 #[derive(Default)]
-pub struct Seen {
+pub(crate) struct Seen {
     pub mode: Option<u32>,
     pub armed: bool,
     /// GLOBAL_POSITION_INT by time_boot_ms.
@@ -246,29 +246,29 @@ pub struct Seen {
 }
 
 impl Seen {
-    pub fn latest(&self) -> Option<&GLOBAL_POSITION_INT_DATA> {
+    pub(crate) fn latest(&self) -> Option<&GLOBAL_POSITION_INT_DATA> {
         self.positions.values().next_back()
     }
-    pub fn clock_ms(&self) -> u32 {
+    pub(crate) fn clock_ms(&self) -> u32 {
         self.positions.keys().next_back().copied().unwrap_or(0)
     }
-    pub fn speed(&self) -> f64 {
+    pub(crate) fn speed(&self) -> f64 {
         self.latest()
             .map_or(0.0, |p| f64::from(p.vx).hypot(f64::from(p.vy)) / 100.0)
     }
 }
 
 /// An operator's ground station on a boat's second MAVLink port.
-pub struct Station {
+pub(crate) struct Station {
     pub sysid: u8,
     connection: Arc<mavlink::AsyncConnection<MavMessage>>,
     seen: Arc<Mutex<Seen>>,
 }
 
-pub const STATION_SYSID: u8 = 250;
+pub(crate) const STATION_SYSID: u8 = 250;
 
 impl Station {
-    pub async fn open(boat: &Boat) -> Station {
+    pub(crate) async fn open(boat: &Boat) -> Station {
         let address = format!("tcpout:127.0.0.1:{}", boat.second);
         let began = Instant::now();
         let connection = loop {
@@ -326,7 +326,7 @@ impl Station {
         station
     }
 
-    pub async fn command(&self, command: MavCmd, param1: f32, param2: f32) {
+    pub(crate) async fn command(&self, command: MavCmd, param1: f32, param2: f32) {
         let header = MavHeader {
             system_id: u32::from(STATION_SYSID),
             component_id: 190,
@@ -343,19 +343,22 @@ impl Station {
         self.connection.send(&header, &message).await.unwrap();
     }
 
-    pub async fn set_mode(&self, mode: u32) {
+    pub(crate) async fn set_mode(&self, mode: u32) {
         let flag = MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED.bits() as f32;
         self.command(MavCmd::MAV_CMD_DO_SET_MODE, flag, mode as f32)
             .await;
     }
 
-    pub fn seen<T>(&self, f: impl FnOnce(&Seen) -> T) -> T {
+    pub(crate) fn seen<T>(&self, f: impl FnOnce(&Seen) -> T) -> T {
         f(&self.seen.lock().unwrap())
     }
 }
 
 /// Polls `check` every 50 ms until it holds or `limit` passes.
-pub async fn wait_for<T>(limit: Duration, mut check: impl AsyncFnMut() -> Option<T>) -> Option<T> {
+pub(crate) async fn wait_for<T>(
+    limit: Duration,
+    mut check: impl AsyncFnMut() -> Option<T>,
+) -> Option<T> {
     let began = Instant::now();
     loop {
         if let Some(t) = check().await {
@@ -373,7 +376,7 @@ pub async fn wait_for<T>(limit: Duration, mut check: impl AsyncFnMut() -> Option
 /// loop looked (at speedup 4 a late look is four times as late): the first
 /// moment after `since` (each boat's clock) at which every boat's newest
 /// report said below 0.3 m/s [s].
-pub async fn all_stopped(stations: &[Station], since: &[u32]) -> f64 {
+pub(crate) async fn all_stopped(stations: &[Station], since: &[u32]) -> f64 {
     wait_for(Duration::from_secs(10), async || {
         stations
             .iter()
@@ -408,7 +411,7 @@ pub async fn all_stopped(stations: &[Station], since: &[u32]) -> f64 {
 }
 
 /// Waits (20 s at most) until some boat goes faster than `speed` [m/s].
-pub async fn under_way(stations: &[Station], speed: f64, what: &str) {
+pub(crate) async fn under_way(stations: &[Station], speed: f64, what: &str) {
     wait_for(Duration::from_secs(20), async || {
         stations
             .iter()
@@ -422,7 +425,7 @@ pub async fn under_way(stations: &[Station], speed: f64, what: &str) {
 /// The mission of the SITL tests, as a `seacover serve --config` TOML: the
 /// origin, a 200 m square round it, two risk objects, and the guidance's
 /// speed below the boats' `WP_SPEED`.
-pub fn mission_toml() -> String {
+pub(crate) fn mission_toml() -> String {
     format!(
         r#"tick_hz = 10.0
 origin = {{ lat = {}, lon = {} }}
@@ -442,7 +445,7 @@ max_speed = 2.0
 }
 
 /// [`mission_toml`] written to `dir/mission.toml`.
-pub fn mission(dir: &Path) -> PathBuf {
+pub(crate) fn mission(dir: &Path) -> PathBuf {
     let path = dir.join("mission.toml");
     std::fs::write(&path, mission_toml()).unwrap();
     path
@@ -451,7 +454,7 @@ pub fn mission(dir: &Path) -> PathBuf {
 /// How still the boats are from now over the next `ms` of ArduPilot's
 /// clock, from their own telemetry: each boat's mean |yaw rate| (ATTITUDE,
 /// rad/s) and mean speed over ground (GLOBAL_POSITION_INT, m/s).
-pub async fn quiet_over(stations: &[Station], ms: u32) -> Vec<(f64, f64)> {
+pub(crate) async fn quiet_over(stations: &[Station], ms: u32) -> Vec<(f64, f64)> {
     let from: Vec<u32> = stations.iter().map(|s| s.seen(Seen::clock_ms)).collect();
     wait_for(Duration::from_secs(60), async || {
         passed(stations, &from, ms).then_some(())
@@ -493,12 +496,12 @@ fn stillness(stations: &[Station], from: &[u32]) -> Vec<(f64, f64)> {
 /// boat's mean |yaw rate| and mean speed ([`quiet_over`]'s), the largest
 /// distance from its goal the coordinator saw, and how many of its
 /// commands then did not say `station`.
-pub struct Arrival {
+pub(crate) struct Arrival {
     pub keeping_after: f64,
     pub boats: Vec<(f64, f64, f64, usize)>,
 }
 
-pub async fn quiet_arrival(
+pub(crate) async fn quiet_arrival(
     stations: &[Station],
     ids: &[String],
     vessels: impl AsyncFn() -> Vec<seacover::protocol::VesselStatusDocument>,
@@ -553,7 +556,7 @@ pub async fn quiet_arrival(
 /// H now (`GET /api/v1/coverage` of the coordinator at `base`) and H with
 /// every vessel of `vessels` that has a cell at its centroid (`POST
 /// /api/v1/coverage/evaluate`).
-pub async fn coverage_now(
+pub(crate) async fn coverage_now(
     http: &reqwest::Client,
     base: &str,
     vessels: &[seacover::protocol::VesselStatusDocument],
@@ -578,7 +581,7 @@ pub async fn coverage_now(
 
 /// `seacover serve` as a process, at the boats' time warp, on a data
 /// directory and a mission file.
-pub struct Coordinator {
+pub(crate) struct Coordinator {
     pub child: Child,
     pub addr: String,
     pub data: PathBuf,
@@ -586,7 +589,7 @@ pub struct Coordinator {
 }
 
 impl Coordinator {
-    pub fn start(data: &Path, config: &Path, bind: &str) -> Coordinator {
+    pub(crate) fn start(data: &Path, config: &Path, bind: &str) -> Coordinator {
         let mut command = Command::new(env!("CARGO_BIN_EXE_seacover"));
         command
             .args(["serve", "--bind", bind, "--time-warp", &SPEEDUP.to_string()])
@@ -605,11 +608,11 @@ impl Coordinator {
         }
     }
 
-    pub fn url(&self, path: &str) -> String {
+    pub(crate) fn url(&self, path: &str) -> String {
         format!("http://{}{path}", self.addr)
     }
 
-    pub async fn vessels(
+    pub(crate) async fn vessels(
         &self,
         http: &reqwest::Client,
     ) -> Vec<seacover::protocol::VesselStatusDocument> {

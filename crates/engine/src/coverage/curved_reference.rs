@@ -68,7 +68,7 @@ fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
 }
 
 /// How finely the reference integrates (see the module doc).
-pub struct Rule {
+pub(super) struct Rule {
     low: (Vec<f64>, Vec<f64>),
     high: (Vec<f64>, Vec<f64>),
     /// Widest panel, in units of 1/√a.
@@ -78,7 +78,7 @@ pub struct Rule {
 }
 
 impl Rule {
-    pub fn new(low: usize, high: usize, width: f64, tol: f64) -> Rule {
+    pub(super) fn new(low: usize, high: usize, width: f64, tol: f64) -> Rule {
         Rule {
             low: gauss_legendre(low),
             high: gauss_legendre(high),
@@ -88,7 +88,7 @@ impl Rule {
     }
 
     /// The rule of the module doc.
-    pub fn standard() -> Rule {
+    pub(super) fn standard() -> Rule {
         Rule::new(16, 24, 0.5, 1e-13)
     }
 }
@@ -100,7 +100,7 @@ struct Conic(f64, Point, f64);
 
 /// The reference integrals of one cell, with what the tests report.
 #[derive(Debug, Clone, Copy)]
-pub struct Reference {
+pub(super) struct Reference {
     /// [∫ g, ∫ x g, ∫ y g] (g = 1 for the area).
     pub value: [f64; 3],
     /// The summed error estimates of the mass.
@@ -119,7 +119,7 @@ struct Scratch {
 }
 
 /// Cell `own` of `fleet` in `region`, by vertical slabs.
-pub struct Slabs<'a> {
+pub(super) struct Slabs<'a> {
     edges: Vec<(Point, Point)>,
     /// Every other vessel j: p_j − p_i, β_j and ln(k_i/k_j).
     rivals: Vec<(Point, f64, f64)>,
@@ -132,7 +132,12 @@ pub struct Slabs<'a> {
 
 impl<'a> Slabs<'a> {
     /// `g` None integrates 1 (the area).
-    pub fn new(region: &Region, fleet: &[Vessel], own: usize, g: Option<&'a Gaussian>) -> Self {
+    pub(super) fn new(
+        region: &Region,
+        fleet: &[Vessel],
+        own: usize,
+        g: Option<&'a Gaussian>,
+    ) -> Self {
         let rings = std::iter::once(region.shell()).chain(region.holes().iter().map(Vec::as_slice));
         let edges = rings
             .flat_map(|r| (0..r.len()).map(move |k| (r[k], r[(k + 1) % r.len()])))
@@ -287,7 +292,7 @@ impl<'a> Slabs<'a> {
         (high, error)
     }
 
-    pub fn integrate(&self, rule: &Rule) -> Reference {
+    pub(super) fn integrate(&self, rule: &Rule) -> Reference {
         let mut s = Scratch::default();
         let widest = self.g.map_or(f64::INFINITY, |g| rule.width / g.a.sqrt());
         let mut panels: Vec<(f64, f64, [f64; 3], f64)> = Vec::new();

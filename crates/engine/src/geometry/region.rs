@@ -491,7 +491,7 @@ pub(crate) mod fixtures {
 
     /// The 100 m square from the origin, with a 20 m square island in its
     /// middle when `island`.
-    pub fn square(island: bool) -> Region {
+    pub(crate) fn square(island: bool) -> Region {
         let p = |x, y| Point { x, y };
         let holes = if island {
             vec![vec![

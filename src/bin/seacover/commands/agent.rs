@@ -7,7 +7,7 @@ use crate::shell::{self, Preset};
 #[derive(clap::Args)]
 // One of the two modes, and the error says so when neither is given.
 #[command(group(clap::ArgGroup::new("mode").required(true).args(["server", "peer"])))]
-pub struct Args {
+pub(crate) struct Args {
     /// Coordinator base URL, e.g. http://127.0.0.1:8080 (not with --peer).
     #[arg(long, value_name = "URL", conflicts_with = "peer")]
     server: Option<String>,
@@ -111,7 +111,7 @@ fn parse_station_radius(s: &str) -> Result<f64, String> {
     }
 }
 
-pub async fn run(args: Args) -> anyhow::Result<()> {
+pub(crate) async fn run(args: Args) -> anyhow::Result<()> {
     if args.peer && args.mavlink.is_empty() {
         peer(args).await
     } else if args.mavlink.is_empty() {

@@ -3,7 +3,7 @@
 use crate::shell;
 
 #[derive(clap::Subcommand)]
-pub enum Command {
+pub(crate) enum Command {
     /// Open N vessel links to a coordinator, report poses at a rate, and
     /// measure links held, commands, latency and the coordinator's CPU and
     /// memory (the targets of docs/performance.md).
@@ -11,7 +11,7 @@ pub enum Command {
 }
 
 #[derive(clap::Args)]
-pub struct LoadArgs {
+pub(crate) struct LoadArgs {
     /// Coordinator base URL, e.g. http://127.0.0.1:8090.
     #[arg(long, value_name = "URL")]
     server: String,
@@ -41,7 +41,7 @@ pub struct LoadArgs {
     json: bool,
 }
 
-pub async fn run(Command::Load(args): Command) -> anyhow::Result<()> {
+pub(crate) async fn run(Command::Load(args): Command) -> anyhow::Result<()> {
     let seconds = |name: &str, s: f64| {
         anyhow::ensure!(
             s.is_finite() && (0.0..=86_400.0).contains(&s),

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use crate::shell;
 
 #[derive(clap::Args)]
-pub struct Args {
+pub(crate) struct Args {
     /// Address and port of the coordinator (its dashboard and API); any
     /// address but loopback needs a token.
     #[arg(long, value_name = "ADDR:PORT", default_value = "127.0.0.1:8080")]
@@ -24,7 +24,7 @@ pub struct Args {
     record: Option<PathBuf>,
 }
 
-pub async fn run(args: Args) -> anyhow::Result<()> {
+pub(crate) async fn run(args: Args) -> anyhow::Result<()> {
     shell::check_warp(args.time_warp)?;
     let (listener, stop) = shell::listen(&args.bind).await?;
     let addr = listener.local_addr()?;

@@ -17,7 +17,7 @@ use seacover::coverage::integrate::Tolerance;
 use seacover::protocol::{CellDocument, ErrorDetail, ErrorDocument, EvaluationDocument};
 
 #[derive(clap::Args)]
-pub struct Args {
+pub(crate) struct Args {
     /// Scenario JSON file; standard input when omitted or "-".
     #[arg(value_name = "FILE")]
     file: Option<PathBuf>,
@@ -28,7 +28,7 @@ pub struct Args {
     tolerance: Option<f64>,
 }
 
-pub fn run(Args { file, tolerance }: Args) -> ExitCode {
+pub(crate) fn run(Args { file, tolerance }: Args) -> ExitCode {
     let tolerance = match tolerance {
         None => Tolerance::default(),
         Some(t) if t.is_finite() && (1e-14..=1e-2).contains(&t) => Tolerance::adaptive(t),
@@ -70,7 +70,7 @@ pub fn run(Args { file, tolerance }: Args) -> ExitCode {
 /// the cells go between the brackets of its `"cells":[]`; should that not
 /// be found exactly once (a change of the document), the whole document is
 /// serialized on this thread.
-pub fn write(mut doc: EvaluationDocument, out: &mut impl Write) -> std::io::Result<()> {
+pub(crate) fn write(mut doc: EvaluationDocument, out: &mut impl Write) -> std::io::Result<()> {
     const KEY: &[u8] = br#""cells":[]"#;
     let cells = std::mem::take(&mut doc.cells);
     let frame = serde_json::to_vec(&doc)?;

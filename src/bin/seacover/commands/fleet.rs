@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 
 #[derive(clap::Subcommand)]
-pub enum Command {
+pub(crate) enum Command {
     /// Make a fleet's credentials (Zenoh user/password authentication) in
     /// DIR: copy DIR to every member and start each with `--zenoh-config
     /// DIR/zenoh.json5`; a program without them neither hears the fleet
@@ -19,7 +19,7 @@ pub enum Command {
     },
 }
 
-pub fn run(command: Command) -> anyhow::Result<()> {
+pub(crate) fn run(command: Command) -> anyhow::Result<()> {
     match command {
         Command::Credentials { dir, fleet } => {
             anyhow::ensure!(

@@ -1,11 +1,11 @@
 //! One module per subcommand: its arguments (clap derive) and its `run`.
 
-pub mod agent;
-pub mod bench;
-pub mod demo;
-pub mod evaluate;
-pub mod fleet;
-pub mod record;
-pub mod replay;
-pub mod serve;
-pub mod sim;
+pub(crate) mod agent;
+pub(crate) mod bench;
+pub(crate) mod demo;
+pub(crate) mod evaluate;
+pub(crate) mod fleet;
+pub(crate) mod record;
+pub(crate) mod replay;
+pub(crate) mod serve;
+pub(crate) mod sim;

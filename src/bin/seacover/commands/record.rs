@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use seacover::recorder::{inspect, reader::Recording};
 
 #[derive(clap::Subcommand)]
-pub enum Command {
+pub(crate) enum Command {
     /// Duration, vessels, channels with message counts, H at start and end,
     /// gaps in the data.
     Info {
@@ -39,14 +39,14 @@ pub enum Command {
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
-pub enum Format {
+pub(crate) enum Format {
     /// Comma-separated values with a header line.
     Csv,
     /// JSON lines: one message per line.
     Jsonl,
 }
 
-pub fn run(command: Command) -> anyhow::Result<()> {
+pub(crate) fn run(command: Command) -> anyhow::Result<()> {
     match command {
         Command::Info { file, json } => {
             let info = inspect::info(&Recording::open(&file)?)?;

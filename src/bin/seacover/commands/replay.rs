@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use crate::shell;
 
 #[derive(clap::Args)]
-pub struct Args {
+pub(crate) struct Args {
     /// An MCAP recording (of `serve`, `demo --record` or `sim --record`).
     #[arg(value_name = "FILE")]
     file: PathBuf,
@@ -17,7 +17,7 @@ pub struct Args {
     speed: f64,
 }
 
-pub async fn run(Args { file, bind, speed }: Args) -> anyhow::Result<()> {
+pub(crate) async fn run(Args { file, bind, speed }: Args) -> anyhow::Result<()> {
     let (listener, stop) = shell::listen(&bind).await?;
     println!(
         "seacover: replaying {} on http://{}",

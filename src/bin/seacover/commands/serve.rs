@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use crate::shell;
 
 #[derive(clap::Args)]
-pub struct Args {
+pub(crate) struct Args {
     /// Address and port to listen on; any address but loopback needs a
     /// token.
     #[arg(long, value_name = "ADDR:PORT", default_value = "127.0.0.1:8080")]
@@ -93,7 +93,7 @@ fn positive_minutes(s: &str) -> Result<f64, String> {
     }
 }
 
-pub async fn run(args: Args) -> anyhow::Result<()> {
+pub(crate) async fn run(args: Args) -> anyhow::Result<()> {
     let record = (!args.no_record).then(|| seacover::recorder::RecorderConfig {
         target: seacover::recorder::Target::Directory {
             dir: args

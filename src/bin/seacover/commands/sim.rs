@@ -12,7 +12,7 @@ use seacover::sim::{Config, DisturbanceKind, load_scenario, run_to_dir, study};
 use crate::shell::Preset;
 
 #[derive(clap::Args)]
-pub struct Args {
+pub(crate) struct Args {
     #[command(subcommand)]
     study: Option<Study>,
     /// `paper`, `harbour-8`, `harbour-30` (built in) or a scenario JSON
@@ -116,7 +116,7 @@ enum Disturbance {
     None,
 }
 
-pub fn run(args: Args) -> ExitCode {
+pub(crate) fn run(args: Args) -> ExitCode {
     let (name, result) = match args.study {
         Some(Study::SafetyStudy {
             seeds,
