@@ -3,7 +3,7 @@
 //! of its own (host i of a [`Medium`], tests/it/common/netns.rs), started
 //! where the paper's vessels start, with the paper's scenario
 //! (examples/paper.json) as the mission file, and the independent Python
-//! observer (tests/it/peer/observer.py) in host 0 (and in host 9 too where
+//! observer (tests/python/observer.py) in host 0 (and in host 9 too where
 //! the fleet is split). Everything judged comes from outside the vessels:
 //! the positions in the beacons the observer hears, `seacover evaluate` on
 //! those positions (cells, centroids, H), `seacover sim --scenario paper`

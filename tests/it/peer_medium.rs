@@ -1,6 +1,6 @@
 //! The peer tests' radio medium tested on its own (tests/it/common/netns.rs):
 //! three network namespaces on one bridge, the independent Python observer
-//! in host 0 and two Python stand-in vessels (tests/it/peer/inject.py,
+//! in host 0 and two Python stand-in vessels (tests/python/inject.py,
 //! valid CBOR beacons at 10 Hz) in hosts 1 and 2, linked by Zenoh's
 //! multicast scouting alone. The medium's conditions must show in what the
 //! observer hears: a partition silences the other side, healing brings it

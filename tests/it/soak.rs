@@ -433,7 +433,7 @@ const PEER_SPAN: f64 = 2.0 * HOUR;
 /// [`PEER_WARP`]) does not fit CI's budget: [`PEER_SPAN`] does, and the
 /// day was measured outside it (docs/performance.md). Judged: resident memory after the first
 /// mission hour within 10 % of its value at that hour; and that the fleet
-/// kept up, from outside: the independent observer (tests/it/peer/
+/// kept up, from outside: the independent observer (tests/python/
 /// observer.py, in a second host) counts each vessel's beacons over the
 /// last seconds, which must come at 5 per second of mission time.
 #[test]

@@ -2,8 +2,8 @@
 //! Zenoh's Python API and `cbor2` (the venv scripts/test makes, found through
 //! `SEACOVER_PYTHON`), and the independent tools started inside a
 //! [`Medium`](super::netns::Medium)'s hosts: the observer
-//! (`tests/it/peer/observer.py`, which writes what it hears as JSON lines)
-//! and the injector (`tests/it/peer/inject.py`, raw payloads).
+//! (`tests/python/observer.py`, which writes what it hears as JSON lines)
+//! and the injector (`tests/python/inject.py`, raw payloads).
 //!
 //! Both tools print `ready` once their Zenoh session is open; the helpers
 //! here wait for that line, so a test never races a tool's start-up. A
@@ -22,9 +22,9 @@ use super::netns::Medium;
 use super::process::{KillOnDrop, signal, venv_python};
 
 /// The observer script.
-pub(crate) const OBSERVER: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/it/peer/observer.py");
+pub(crate) const OBSERVER: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/python/observer.py");
 /// The injector script.
-pub(crate) const INJECT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/it/peer/inject.py");
+pub(crate) const INJECT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/python/inject.py");
 
 /// The interpreter with `zenoh` and `cbor2` (see [`venv_python`]).
 pub(crate) fn python_or_skip(test: &str) -> Option<PathBuf> {
