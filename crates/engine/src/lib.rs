@@ -11,6 +11,10 @@
 //!   disturbance observer, the robust controller, guidance, the on-board
 //!   reference governor and the safety layer.
 //!
+//! The `evaluate` example builds a scenario with this API alone and prints
+//! its partition, H and centroids:
+//! `cargo run -p seacover-engine --example evaluate`.
+//!
 //! Invariants (the crate's dependencies enforce the first):
 //! - no async, no I/O, no clocks, no serde: documents and processes live in
 //!   the `seacover` crate above;
@@ -19,6 +23,9 @@
 //! - validation happens once, in constructors that return typed errors
 //!   naming the field; after that, computations cannot fail: an empty cell
 //!   is a result, never an error, a panic or a NaN.
+
+// The engine is usable as a library by itself, so everything it exports says what it is.
+#![warn(missing_docs)]
 
 pub mod control;
 pub mod coverage;

@@ -163,6 +163,7 @@ fn turn_time(angle: f64, turn_rate: f64) -> f64 {
 /// One vessel's input to the filter.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Desire {
+    /// Where the vessel is [m].
     pub position: Point,
     /// Its actual ground velocity.
     pub actual: Point,
@@ -219,6 +220,7 @@ pub struct Scratch {
 /// everything in its [`Desire`] but the velocity.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Mover {
+    /// Where the vessel is [m].
     pub position: Point,
     /// Its actual ground velocity.
     pub actual: Point,

@@ -19,7 +19,9 @@ use super::{Vec3, sig};
 /// Gains of one channel.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ChannelGains {
+    /// k₁ > 0, the gain of the sig^λ term of ∇ (paper eq. 33–35).
     pub k1: f64,
+    /// k₂ > 0, the gain of the sig^η term of ∇ (paper eq. 33–35).
     pub k2: f64,
     /// ξ > 0.
     pub xi: f64,
@@ -48,7 +50,9 @@ impl ChannelGains {
 /// Gains for surge and yaw.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ControllerGains {
+    /// The surge channel's gains (∇u).
     pub surge: ChannelGains,
+    /// The yaw channel's gains (∇r).
     pub yaw: ChannelGains,
 }
 
@@ -67,14 +71,41 @@ impl Default for ControllerGains {
 /// What the controller tracks.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Reference {
+    /// Desired surge speed u_d [m/s].
     pub u_d: f64,
+    /// Desired yaw rate r_d [rad/s].
     pub r_d: f64,
+    /// Its rate of change u̇_d [m/s²], fed forward.
     pub u_d_dot: f64,
+    /// Its rate of change ṙ_d [rad/s²], fed forward.
     pub r_d_dot: f64,
 }
 
 /// (τ_u, τ_r) before saturation, from the measured velocity `v`, the
 /// reference and the disturbance estimate.
+///
+/// ```
+/// use seacover_engine::control::Vec3;
+/// use seacover_engine::control::controller::{ControllerGains, Reference, control};
+/// use seacover_engine::control::model::{State, VesselParams, step};
+///
+/// let (params, gains) = (VesselParams::PAPER, ControllerGains::default());
+/// let reference = Reference { u_d: 1.0, ..Reference::default() };
+/// let calm = |_: f64, _: &State| Vec3::zeros();
+/// // At rest: the surge error −1 m/s asks for m11 (k₁ + k₂) = 4000 N, which
+/// // the hull's model saturates at its limit, 2000 N.
+/// let state = State::default();
+/// let (tau_u, tau_r) = control(&params, &gains, state.vel, &reference, Vec3::zeros());
+/// assert_eq!((tau_u, tau_r), (4000.0, 0.0));
+/// let (mut state, applied) = step(&params, &state, tau_u, tau_r, 0.0, 0.01, calm);
+/// assert_eq!(applied, (2000.0, 0.0));
+/// // Ten seconds of 10 ms steps later the surge speed is 1 m/s.
+/// for k in 1..1000 {
+///     let (tau_u, tau_r) = control(&params, &gains, state.vel, &reference, Vec3::zeros());
+///     state = step(&params, &state, tau_u, tau_r, k as f64 * 0.01, 0.01, calm).0;
+/// }
+/// assert!((state.vel.x - 1.0).abs() < 1e-6, "{}", state.vel.x);
+/// ```
 pub fn control(
     p: &VesselParams,
     gains: &ControllerGains,

@@ -14,16 +14,20 @@ use super::Vec3;
 /// One disturbance model.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Disturbance {
+    /// τ_d = 0.
     None,
     /// The paper's τ_d = (sin(t + i), 1.5 cos(t + i), 2 sin(t + i)) for
     /// vessel number i (1-based).
     Paper {
+        /// The vessel's number i, from 1.
         index: usize,
     },
     /// A constant force (N) in the earth frame, as a steady current or wind
     /// exerts on a hull; in the body frame it turns with the vessel.
     Current {
+        /// The force along the earth frame's x (east) [N].
         fx: f64,
+        /// The force along its y (north) [N].
         fy: f64,
     },
     /// Smooth random gusts: per channel a sum of sinusoids with random

@@ -21,7 +21,9 @@ use crate::geometry::Point;
 /// One constraint a · w ≥ b, with a a unit vector.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct HalfPlane {
+    /// The unit normal a, pointing into the allowed side.
     pub a: Point,
+    /// The least a · w allowed.
     pub b: f64,
 }
 

@@ -18,14 +18,21 @@ use super::{Vec3, wrap};
 /// actuator limits.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct VesselParams {
+    /// Surge mass, added mass included [kg].
     pub m11: f64,
+    /// Sway mass, added mass included [kg].
     pub m22: f64,
+    /// Yaw moment of inertia, added inertia included [kg m²].
     pub m33: f64,
+    /// Linear surge damping [kg/s].
     pub d11: f64,
+    /// Linear sway damping [kg/s].
     pub d22: f64,
+    /// Linear yaw damping [kg m²/s].
     pub d33: f64,
     /// Surge force limits [N]: τ_u ∈ [−tau_u_reverse, tau_u_max].
     pub tau_u_max: f64,
+    /// The astern surge force limit, as a magnitude [N].
     pub tau_u_reverse: f64,
     /// Yaw moment limit [N m]: |τ_r| ≤ tau_r_max.
     pub tau_r_max: f64,
@@ -115,9 +122,14 @@ impl VesselParams {
 /// Pose η = (x, y, ψ) and body velocity V = (u, v, r).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct State {
+    /// East position x in the mission's plane [m].
     pub x: f64,
+    /// North position y [m].
     pub y: f64,
+    /// Heading ψ, counter-clockwise from east, in (−π, π] [rad].
     pub psi: f64,
+    /// Body velocity V: surge u [m/s], sway v [m/s] (to port), yaw rate
+    /// r [rad/s].
     pub vel: Vec3,
 }
 

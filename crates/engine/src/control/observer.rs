@@ -28,7 +28,10 @@ use super::model::VesselParams;
 /// Observer gains.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ObserverGains {
+    /// b₁, the gain of the −b₁ |Ω|^½ sign(Ω) term (paper eq. 30).
     pub b1: f64,
+    /// b₂ [N/s], the rate of the estimate, dτ̄_d/dt = −b₂ sign(Ω); it must
+    /// exceed |τ̇_d| (paper Assumption 2).
     pub b2: f64,
 }
 
@@ -54,6 +57,7 @@ impl Default for ObserverGains {
 /// Observer state for one vessel.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Observer {
+    /// The observer's gains.
     pub gains: ObserverGains,
     params: VesselParams,
     /// V̄.
@@ -67,6 +71,8 @@ pub struct Observer {
 }
 
 impl Observer {
+    /// An observer for a hull with `params`, estimating τ̄_d = 0 until its
+    /// second measurement (the first only sets V̄).
     pub fn new(params: VesselParams, gains: ObserverGains) -> Self {
         Observer {
             gains,

@@ -68,12 +68,19 @@ impl Default for Limits {
 /// plane and its body velocities.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sample {
+    /// The vessel's own clock [s].
     pub t: f64,
+    /// East position x [m].
     pub x: f64,
+    /// North position y [m].
     pub y: f64,
+    /// Heading ψ [rad].
     pub psi: f64,
+    /// Surge speed u [m/s].
     pub u: f64,
+    /// Sway speed v [m/s].
     pub v: f64,
+    /// Yaw rate r [rad/s].
     pub r: f64,
 }
 
@@ -162,6 +169,7 @@ pub enum Verdict {
 }
 
 impl Verdict {
+    /// Whether the pose was believed ([`Verdict::Accepted`]).
     pub fn accepted(&self) -> bool {
         matches!(self, Verdict::Accepted)
     }
@@ -186,6 +194,7 @@ struct Quarantine {
 }
 
 impl Judge {
+    /// A judge for a vessel in good standing with no pose yet.
     pub fn new() -> Judge {
         Judge::default()
     }

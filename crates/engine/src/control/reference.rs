@@ -54,9 +54,13 @@ const BANDWIDTH: f64 = 20.0;
 /// rates, i.e. the line c(t) from that instant on.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Line {
+    /// Desired surge speed u_d at the line's instant [m/s].
     pub u_d: f64,
+    /// Desired yaw rate r_d at the line's instant [rad/s].
     pub r_d: f64,
+    /// The line's surge slope u̇_d [m/s²].
     pub u_d_dot: f64,
+    /// The line's yaw slope ṙ_d [rad/s²].
     pub r_d_dot: f64,
 }
 
@@ -153,7 +157,9 @@ impl Governor {
 /// pose, so that nothing between two samples is hidden.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Peaks {
+    /// Tracking error (u − u_ref [m/s], r − r_ref [rad/s]).
     pub error: (f64, f64),
+    /// Command lag (u_d − u_ref [m/s], r_d − r_ref [rad/s]).
     pub lag: (f64, f64),
 }
 

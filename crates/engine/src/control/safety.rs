@@ -171,9 +171,10 @@ pub struct SafeCommand {
     pub goal: Point,
     /// Where the vessel steers now: the goal, or the route's next waypoint.
     pub towards: Point,
-    /// The nominal and the filtered desired ground velocity [m/s] (equal when
-    /// the filter is off or under the `paper` law).
+    /// The nominal desired ground velocity [m/s].
     pub nominal: Point,
+    /// The filtered desired ground velocity [m/s]: `nominal` when the filter
+    /// is off or under the `paper` law.
     pub filtered: Point,
     /// Whether the filter changed the nominal velocity by more than the
     /// tolerance.
@@ -204,14 +205,17 @@ impl SafetyLayer {
         })
     }
 
+    /// The mission's safety parameters.
     pub fn params(&self) -> &SafetyParams {
         &self.params
     }
 
+    /// The region's shore, indexed for distance queries.
     pub fn shore(&self) -> &Shore {
         &self.shore
     }
 
+    /// The route map round the islands, at the goals' clearance.
     pub fn roadmap(&self) -> &Roadmap {
         &self.roadmap
     }

@@ -124,7 +124,9 @@ pub const RETURN: f64 = 4.0;
 pub struct Look<'a> {
     /// 0: never keep station.
     pub hold_radius: f64,
+    /// The vessel's pose and velocity now.
     pub state: &'a State,
+    /// The goal (x, y) [m].
     pub goal: (f64, f64),
     /// Distance to the goal [m].
     pub e: f64,
@@ -152,12 +154,20 @@ pub enum Phase {
     Free,
     /// The `course` law steers, its turn coming in since `since` (keeping
     /// ended then).
-    Returning { since: f64 },
+    Returning {
+        /// Mission time keeping ended [s].
+        since: f64,
+    },
     /// Shedding its velocity.
     Braking,
     /// Holding station, the bow aimed at `heading`; `shedding`: along the
     /// velocity, to take a sway out.
-    Keeping { heading: f64, shedding: bool },
+    Keeping {
+        /// The heading the bow is aimed at [rad].
+        heading: f64,
+        /// Whether it is aimed along the velocity, to take a sway out.
+        shedding: bool,
+    },
 }
 
 /// What the guidance does this tick.
@@ -170,9 +180,13 @@ pub enum Order {
     Brake,
     /// This raw command: (u_d, r_d, the heading error acted on).
     Hold {
+        /// Desired surge speed u_d [m/s].
         u: f64,
+        /// Desired yaw rate r_d [rad/s].
         r: f64,
+        /// The rate u̇_d [m/s²].
         u_dot: f64,
+        /// The heading error acted on [rad].
         psi_e: f64,
     },
 }

@@ -297,13 +297,12 @@ fn arc(c: Point, radius: f64, start: f64, sweep: f64, form: &Form) -> (f64, Poin
         g,
         far,
         near2,
-        decay,
+        decay: _,
         max_angle,
     } = *form;
     let a = g.a;
     let lambda = g.log_weight;
     let scale = lambda.exp();
-    let (x, w) = &*GL;
     // The point `off` radians along the arc from its start, relative to
     // m: the start, then the chord 2R sin(Δ/2) ⊥u(θ₀ + Δ/2). Not
     // c + R u(θ): for a huge radius c and R u cancel to a point near m,
@@ -346,44 +345,7 @@ fn arc(c: Point, radius: f64, start: f64, sweep: f64, form: &Form) -> (f64, Poin
     while done < total {
         let r0sq = norm2(y0);
         let r0 = r0sq.sqrt();
-        // The exponent along the circle is a r_min² + 2aRD (1 − cos φ), φ
-        // from the point nearest m: pieces no wider than its width there,
-        // 2/√(aRD), and no longer than 3/(aRD |sin φ|), over which it
-        // changes by 6 — the straight edges' 2/√a and 3/(a u) with u the
-        // distance from the foot, since D |sin φ| = |y·u⊥| plays u's part.
-        // The rule 2/(R√a) and 3/(a r R) would be far
-        // stricter (r ≥ D |sin φ|) where a narrow Gaussian sees a small
-        // circle from afar: millions of pieces of 1e-12 rad (the floor)
-        // on one arc.
-        let mut step = width;
-        let along = (cp * y0.y - sp * y0.x).abs();
-        if along > 0.0 {
-            step = step.min(decay / (a * radius * along));
-        }
-        if far {
-            // No longer than half the distance d of the poles of
-            // e^{−a r²}/r² (r = 0 in the complex angle) from the piece: d
-            // is at least the cell's distance √near2 and, along a piece
-            // no longer than r0/3, at least 2r0/3 (r may fall towards m
-            // along an arc, unlike along the straight edges' pieces,
-            // which start at their nearest point). Pieces as long as d
-            // were measured 5e-12 off.
-            step = step.min((0.5 * near2.sqrt()).max(r0 / 3.0) / radius);
-        }
-        // No piece shorter than 1e-12 of the distances at play: the start
-        // of the next one is carried by adding the chord to coordinates as
-        // large as r and R, and a chord below their resolution would leave
-        // r where it was (found by the fuzzer: a narrow Gaussian 5e6 m
-        // from an arc's corner, whose cutoff lies within 1e-8 m of it,
-        // took 1e-12 rad steps that r² never saw). The integrand then
-        // varies within a few ulp of the coordinates, where no rule can
-        // resolve it; elsewhere the rule's pieces are far longer. Never
-        // past max_angle, where a tiny circle lies far from m (the
-        // fuzzer again).
-        let step = step
-            .max(1e-12 * (1.0 + r0 / radius))
-            .min(max_angle)
-            .min(total - done);
+        let step = piece_length(y0, (cp, sp), r0, width, radius, form).min(total - done);
         // Where the piece's start is beyond the cutoff, skip as far as the
         // whole piece stays beyond it, not in steps of the Gaussian's
         // width: a circle of a huge radius past a narrow Gaussian would
@@ -426,42 +388,7 @@ fn arc(c: Point, radius: f64, start: f64, sweep: f64, form: &Form) -> (f64, Poin
         if skipped {
             continue;
         }
-        // Each node from the piece's start by rotations: u(θ_p + δ/2) and
-        // u(θ_p + δ) from one sin_cos(δ/2), the point the piece's start
-        // plus the chord 2R sin(δ/2) ⊥u(θ_p + δ/2), as `at` does from the
-        // arc's start (one trigonometric call per node instead of three).
-        // Node by node into arrays, without branches (the form is the
-        // same for the whole piece), so that the twelve evaluate together
-        // in vector registers, as the straight edges' nodes do.
-        let mut yn = [0.0; NODES];
-        let mut nx = [0.0; NODES];
-        let mut ny = [0.0; NODES];
-        let mut r2s = [0.0; NODES];
-        for k in 0..NODES {
-            let (sh, ch) = small_sin_cos(0.5 * dir * step * x[k]);
-            let (hx, hy) = (ch * cp - sh * sp, sh * cp + ch * sp);
-            let (ux, uy) = (ch * hx - sh * hy, sh * hx + ch * hy);
-            let chord = 2.0 * radius * sh;
-            let (yx, yy) = (y0.x - hy * chord, y0.y + hx * chord);
-            r2s[k] = yx * yx + yy * yy;
-            yn[k] = dir * (yx * ux + yy * uy);
-            nx[k] = ux * dir;
-            ny[k] = uy * dir;
-        }
-        let mut e = [0.0; NODES];
-        let mut per_r2 = [0.0; NODES];
-        if far {
-            for k in 0..NODES {
-                e[k] = exp_fast(lambda - a * r2s[k]);
-                per_r2[k] = yn[k] * e[k] / r2s[k];
-            }
-        } else {
-            for k in 0..NODES {
-                e[k] = exp_m1_fast(-a * r2s[k]);
-                per_r2[k] = yn[k] * if r2s[k] > 0.0 { -e[k] / r2s[k] } else { a };
-            }
-        }
-        let [mi, lx, ly] = weighted_sums(w, [&per_r2, &e, &e], [None, Some(&nx), Some(&ny)]);
+        let [mi, lx, ly] = piece_sums(step * dir, (cp, sp), y0, radius, form);
         let li = Point { x: lx, y: ly };
         // ds = R dθ over a piece of `step` radians.
         let ds = radius * step;
@@ -484,6 +411,104 @@ fn arc(c: Point, radius: f64, start: f64, sweep: f64, form: &Form) -> (f64, Poin
         done += step;
     }
     (mass, line)
+}
+
+/// How long the piece starting at `y0` (relative to m; its direction on
+/// the circle (cp, sp), its distance from m `r0`) may be [rad]: no wider
+/// than `width`, the exponent's width where the circle passes nearest m.
+#[inline]
+fn piece_length(
+    y0: Point,
+    (cp, sp): (f64, f64),
+    r0: f64,
+    width: f64,
+    radius: f64,
+    form: &Form,
+) -> f64 {
+    let (a, far, near2, decay, max_angle) =
+        (form.g.a, form.far, form.near2, form.decay, form.max_angle);
+    // The exponent along the circle is a r_min² + 2aRD (1 − cos φ), φ
+    // from the point nearest m: pieces no wider than its width there,
+    // 2/√(aRD), and no longer than 3/(aRD |sin φ|), over which it
+    // changes by 6 — the straight edges' 2/√a and 3/(a u) with u the
+    // distance from the foot, since D |sin φ| = |y·u⊥| plays u's part.
+    // The rule 2/(R√a) and 3/(a r R) would be far
+    // stricter (r ≥ D |sin φ|) where a narrow Gaussian sees a small
+    // circle from afar: millions of pieces of 1e-12 rad (the floor)
+    // on one arc.
+    let mut step = width;
+    let along = (cp * y0.y - sp * y0.x).abs();
+    if along > 0.0 {
+        step = step.min(decay / (a * radius * along));
+    }
+    if far {
+        // No longer than half the distance d of the poles of
+        // e^{−a r²}/r² (r = 0 in the complex angle) from the piece: d
+        // is at least the cell's distance √near2 and, along a piece
+        // no longer than r0/3, at least 2r0/3 (r may fall towards m
+        // along an arc, unlike along the straight edges' pieces,
+        // which start at their nearest point). Pieces as long as d
+        // were measured 5e-12 off.
+        step = step.min((0.5 * near2.sqrt()).max(r0 / 3.0) / radius);
+    }
+    // No piece shorter than 1e-12 of the distances at play: the start
+    // of the next one is carried by adding the chord to coordinates as
+    // large as r and R, and a chord below their resolution would leave
+    // r where it was (found by the fuzzer: a narrow Gaussian 5e6 m
+    // from an arc's corner, whose cutoff lies within 1e-8 m of it,
+    // took 1e-12 rad steps that r² never saw). The integrand then
+    // varies within a few ulp of the coordinates, where no rule can
+    // resolve it; elsewhere the rule's pieces are far longer. Never
+    // past max_angle, where a tiny circle lies far from m (the
+    // fuzzer again).
+    step.max(1e-12 * (1.0 + r0 / radius)).min(max_angle)
+}
+
+/// One piece's Gauss–Legendre sums [Σ w r⁻² y·n e, Σ w e nₓ, Σ w e n_y]
+/// (the far form's e = e^{λ − a r²}, the near form's e^{−a r²} − 1): the
+/// piece runs `signed` radians (its sign the arc's direction) from `y0`,
+/// relative to m, whose direction on the circle is (cp, sp).
+#[inline]
+fn piece_sums(signed: f64, (cp, sp): (f64, f64), y0: Point, radius: f64, form: &Form) -> [f64; 3] {
+    let (a, lambda, far) = (form.g.a, form.g.log_weight, form.far);
+    let dir = signed.signum();
+    let (x, w) = &*GL;
+    // Each node from the piece's start by rotations: u(θ_p + δ/2) and
+    // u(θ_p + δ) from one sin_cos(δ/2), the point the piece's start
+    // plus the chord 2R sin(δ/2) ⊥u(θ_p + δ/2), as `at` does from the
+    // arc's start (one trigonometric call per node instead of three).
+    // Node by node into arrays, without branches (the form is the
+    // same for the whole piece), so that the twelve evaluate together
+    // in vector registers, as the straight edges' nodes do.
+    let mut yn = [0.0; NODES];
+    let mut nx = [0.0; NODES];
+    let mut ny = [0.0; NODES];
+    let mut r2s = [0.0; NODES];
+    for k in 0..NODES {
+        let (sh, ch) = small_sin_cos(0.5 * signed * x[k]);
+        let (hx, hy) = (ch * cp - sh * sp, sh * cp + ch * sp);
+        let (ux, uy) = (ch * hx - sh * hy, sh * hx + ch * hy);
+        let chord = 2.0 * radius * sh;
+        let (yx, yy) = (y0.x - hy * chord, y0.y + hx * chord);
+        r2s[k] = yx * yx + yy * yy;
+        yn[k] = dir * (yx * ux + yy * uy);
+        nx[k] = ux * dir;
+        ny[k] = uy * dir;
+    }
+    let mut e = [0.0; NODES];
+    let mut per_r2 = [0.0; NODES];
+    if far {
+        for k in 0..NODES {
+            e[k] = exp_fast(lambda - a * r2s[k]);
+            per_r2[k] = yn[k] * e[k] / r2s[k];
+        }
+    } else {
+        for k in 0..NODES {
+            e[k] = exp_m1_fast(-a * r2s[k]);
+            per_r2[k] = yn[k] * if r2s[k] > 0.0 { -e[k] / r2s[k] } else { a };
+        }
+    }
+    weighted_sums(w, [&per_r2, &e, &e], [None, Some(&nx), Some(&ny)])
 }
 
 /// An arc's circle as seen from g's centre m, for [`skip_angle`].

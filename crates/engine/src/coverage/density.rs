@@ -19,8 +19,11 @@ pub const MAX_OBJECTS: usize = 10_000;
 /// One Gaussian risk object.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RiskObject {
+    /// Its centre s_j [m].
     pub center: Point,
+    /// Its peak α_j > 0: what it adds to φ0 at its centre (paper eq. 5).
     pub alpha: f64,
+    /// Its spread σ_j > 0 [m] (paper eq. 5).
     pub sigma: f64,
 }
 

@@ -32,8 +32,11 @@ const SAME_BETA: f64 = 1e-9;
 /// Where `own` beats `other`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Dominance {
+    /// At every point: `other` puts no bound on `own`'s cell.
     Everywhere,
+    /// At no point: `own`'s cell is empty.
     Nowhere,
+    /// Within this half-plane, disc or disc's complement.
     Within(Bound),
 }
 

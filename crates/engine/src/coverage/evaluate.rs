@@ -24,6 +24,7 @@ use crate::geometry::{Point, Region, bounds};
 /// Evaluation settings.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Options {
+    /// Which integrator computes each cell's figures, and to what accuracy.
     pub tolerance: Tolerance,
     /// Spread the cells over every core (rayon's pool) when the fleet has
     /// at least [`PARALLEL_MIN`](super::PARALLEL_MIN) vessels. The result
@@ -52,10 +53,33 @@ pub struct CellResult {
 pub struct Evaluation {
     /// H(P) = Σ_i M_i.
     pub h: f64,
+    /// Every vessel's cell and its figures, in the fleet's order.
     pub cells: Vec<CellResult>,
 }
 
 /// Evaluates the coverage of `fleet` over `region` under `risk`.
+///
+/// ```
+/// use seacover_engine::coverage::fleet::{DEFAULT_BETA, DEFAULT_K};
+/// use seacover_engine::coverage::{Fleet, Options, RiskField, RiskObject, Vessel, evaluate};
+/// use seacover_engine::geometry::{Point, Region};
+///
+/// let p = |x, y| Point { x, y };
+/// let square = vec![p(0.0, 0.0), p(100.0, 0.0), p(100.0, 100.0), p(0.0, 100.0)];
+/// let region = Region::new(square, vec![])?;
+/// let hot = RiskObject { center: p(80.0, 50.0), alpha: 5.0, sigma: 10.0 };
+/// let risk = RiskField::new(0.1, vec![hot])?;
+/// let vessel = |x, y| Vessel { position: p(x, y), k: DEFAULT_K, beta: DEFAULT_BETA };
+/// let fleet = Fleet::new(vec![vessel(25.0, 50.0), vessel(75.0, 50.0)])?;
+///
+/// let e = evaluate(&region, &risk, &fleet, &Options::default());
+/// // Two halves of the square; the one with the risk object weighs more.
+/// assert!((e.cells[0].area - 5000.0).abs() < 1e-9);
+/// assert!(e.cells[1].mass > e.cells[0].mass);
+/// assert!(e.cells[0].centroid.x < 50.0 && e.cells[1].centroid.x > 50.0);
+/// assert_eq!(e.h, e.cells[0].mass + e.cells[1].mass);
+/// # Ok::<(), seacover_engine::coverage::InputError>(())
+/// ```
 pub fn evaluate(region: &Region, risk: &RiskField, fleet: &Fleet, options: &Options) -> Evaluation {
     let geometries = cells_with(region, fleet, options.parallel);
     let cells: Vec<CellResult> = super::map_each(
@@ -74,6 +98,30 @@ pub fn evaluate(region: &Region, risk: &RiskField, fleet: &Fleet, options: &Opti
 /// for every vessel, so a caller may compute the cells one by one, in any
 /// order and on any thread, with the same result. `near` is scratch space,
 /// reused from cell to cell.
+///
+/// ```
+/// use seacover_engine::coverage::cells::cell;
+/// use seacover_engine::coverage::evaluate::cell_figures;
+/// use seacover_engine::coverage::{Fleet, Options, RiskField, Vessel, evaluate};
+/// use seacover_engine::geometry::{Point, Region};
+///
+/// let p = |x, y| Point { x, y };
+/// let square = vec![p(0.0, 0.0), p(100.0, 0.0), p(100.0, 100.0), p(0.0, 100.0)];
+/// let region = Region::new(square, vec![])?;
+/// let risk = RiskField::new(1.0, vec![])?;
+/// let vessel = |x, y| Vessel { position: p(x, y), k: 0.5, beta: 0.001 };
+/// let fleet = Fleet::new(vec![vessel(25.0, 50.0), vessel(75.0, 50.0)])?;
+///
+/// // Vessel 1's cell alone: the right half of the square.
+/// let (options, vessel) = (Options::default(), &fleet.vessels()[1]);
+/// let geometry = cell(&region, &fleet, 1);
+/// let one = cell_figures(&region, &risk, vessel, geometry, &options, &mut Vec::new());
+/// assert!((one.area - 5000.0).abs() < 1e-9);
+/// // Φ is flat and the vessel at the half's middle: so is the centroid.
+/// assert!((one.centroid.x - 75.0).abs() < 1e-9 && (one.centroid.y - 50.0).abs() < 1e-9);
+/// assert_eq!(one, evaluate(&region, &risk, &fleet, &options).cells[1]);
+/// # Ok::<(), seacover_engine::coverage::InputError>(())
+/// ```
 pub fn cell_figures(
     region: &Region,
     risk: &RiskField,

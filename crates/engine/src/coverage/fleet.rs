@@ -26,8 +26,13 @@ pub const DEFAULT_BETA: f64 = 0.001;
 /// One vessel as the engine sees it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Vessel {
+    /// p_i, in the region's plane [m].
     pub position: Point,
+    /// The actuator's gain k_i > 0: its performance at p_i itself (paper
+    /// eq. 4).
     pub k: f64,
+    /// The actuator's decay β_i > 0 [1/m²]: the larger, the shorter the
+    /// vessel's reach (paper eq. 4).
     pub beta: f64,
 }
 
@@ -47,6 +52,9 @@ pub struct Fleet {
 }
 
 impl Fleet {
+    /// Validates at least one and at most [`MAX_VESSELS`] vessels, each with
+    /// a position within ±[`MAX_COORDINATE`], 0 < k ≤ [`MAX_K`] and
+    /// 0 < β ≤ [`MAX_BETA`]; errors name the field (`vessels[3].k`).
     pub fn new(vessels: Vec<Vessel>) -> Result<Self, InputError> {
         if vessels.is_empty() {
             return Err(InputError::invalid(
@@ -87,14 +95,18 @@ impl Fleet {
         })
     }
 
+    /// The vessels, in the order given.
     pub fn vessels(&self) -> &[Vessel] {
         &self.vessels
     }
 
+    /// The number of vessels (at least one).
     pub fn len(&self) -> usize {
         self.vessels.len()
     }
 
+    /// Whether the fleet has no vessels: never, as [`Fleet::new`] refuses
+    /// an empty one.
     pub fn is_empty(&self) -> bool {
         self.vessels.is_empty()
     }

@@ -12,7 +12,11 @@ use crate::geometry::Point;
 /// exp(λ − a ‖x − m‖²).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Gaussian {
+    /// λ, the logarithm of the weight.
     pub log_weight: f64,
+    /// The decay a > 0 [1/m²].
     pub a: f64,
+    /// The centre m [m], in the coordinates of the integral (centred on
+    /// the vessel).
     pub center: Point,
 }

@@ -68,6 +68,7 @@ pub struct Tolerance {
     /// Upper bound on triangles per cell; the result is the best estimate
     /// reached when it is hit.
     pub max_triangles: usize,
+    /// Which integrator.
     pub mode: Mode,
 }
 
@@ -150,11 +151,49 @@ pub fn integrate(rings: &[Vec<Point>], terms: &[Gaussian], tol: Tolerance) -> Sc
     if diam == 0.0 {
         return empty;
     }
+    let (kept, s) = kept_terms(&rings, terms, tol);
+    let scaled = |sum: [f64; 3]| Scaled {
+        mass: sum[0],
+        moment: Point {
+            x: sum[1],
+            y: sum[2],
+        },
+        log_scale: s,
+    };
 
+    if tol.mode == Mode::Boundary {
+        let mut sum = [0.0; 3];
+        for (g, far) in &kept {
+            let v = polygon_integrals(&rings, g, *far);
+            for (acc, x) in sum.iter_mut().zip(v) {
+                *acc += x;
+            }
+        }
+        return scaled(sum);
+    }
+
+    let triangles = fans(&rings);
+    if triangles.is_empty() {
+        return empty;
+    }
+    let kept: Vec<Gaussian> = kept.into_iter().map(|(g, _)| g).collect();
+    let a_max = kept.iter().map(|t| t.a).fold(0.0, f64::max);
+    let start = presplit(triangles, KAPPA * KAPPA / a_max, tol.max_triangles);
+    scaled(adapt(start, &kept, diam, tol))
+}
+
+/// The terms that matter over the cell, each scaled by e^(−s) and with
+/// whether its centre is far outside the cell (which selects the boundary
+/// method's split form), and s, the largest log bound.
+fn kept_terms(
+    rings: &[&Vec<Point>],
+    terms: &[Gaussian],
+    tol: Tolerance,
+) -> (Vec<(Gaussian, bool)>, f64) {
     // Where every term's centre lies, and its log bounds over the cell.
     let places: Vec<RingDistances> = terms
         .iter()
-        .map(|t| ring_distances(&rings, t.center))
+        .map(|t| ring_distances(rings, t.center))
         .collect();
     let bounds: Vec<(f64, f64)> = terms
         .iter()
@@ -170,9 +209,7 @@ pub fn integrate(rings: &[Vec<Point>], terms: &[Gaussian], tol: Tolerance) -> Sc
     let s = bounds.iter().map(|b| b.0).fold(f64::NEG_INFINITY, f64::max);
     let floor = bounds.iter().map(|b| b.1).fold(f64::NEG_INFINITY, f64::max);
     let cut = floor + (1e-3 * tol.relative / terms.len() as f64).ln();
-    // Each kept term with whether its centre is far outside the cell, which
-    // selects the boundary method's split form.
-    let kept: Vec<(Gaussian, bool)> = terms
+    let kept = terms
         .iter()
         .zip(&bounds)
         .zip(&places)
@@ -185,29 +222,14 @@ pub fn integrate(rings: &[Vec<Point>], terms: &[Gaussian], tol: Tolerance) -> Sc
             (g, !at.inside && t.a * at.boundary2 >= 1.0)
         })
         .collect();
+    (kept, s)
+}
 
-    if tol.mode == Mode::Boundary {
-        let mut sum = [0.0; 3];
-        for (g, far) in &kept {
-            let v = polygon_integrals(&rings, g, *far);
-            for (acc, x) in sum.iter_mut().zip(v) {
-                *acc += x;
-            }
-        }
-        return Scaled {
-            mass: sum[0],
-            moment: Point {
-                x: sum[1],
-                y: sum[2],
-            },
-            log_scale: s,
-        };
-    }
-
-    // Signed fans: Σ_i ±(r₀, r_i, r_{i+1}) is exactly the ring's interior
-    // (winding number), so this is exact for any oriented chain, bridges and
-    // clockwise hole parts included.
-    let triangles: Vec<(Tri, f64)> = rings
+/// Signed fans: Σ_i ±(r₀, r_i, r_{i+1}) is exactly the ring's interior
+/// (winding number), so this is exact for any oriented chain, bridges and
+/// clockwise hole parts included.
+fn fans(rings: &[&Vec<Point>]) -> Vec<(Tri, f64)> {
+    rings
         .iter()
         .flat_map(|r| {
             (1..r.len() - 1).filter_map(move |i| {
@@ -216,19 +238,16 @@ pub fn integrate(rings: &[Vec<Point>], terms: &[Gaussian], tol: Tolerance) -> Sc
                 (c != 0.0).then_some((t, c.signum()))
             })
         })
-        .collect();
-    if triangles.is_empty() {
-        return empty;
-    }
-    let kept: Vec<Gaussian> = kept.into_iter().map(|(g, _)| g).collect();
-    let a_max = kept.iter().map(|t| t.a).fold(0.0, f64::max);
+        .collect()
+}
 
-    // A priori split, bounded so that the adaptive phase keeps room.
-    let mut start: Vec<(Tri, f64)> = triangles;
-    let h_max2 = KAPPA * KAPPA / a_max;
+/// The a priori split: triangles with an edge longer than √`h_max2` are
+/// halved, bounded so that the adaptive phase keeps room in
+/// `max_triangles`.
+fn presplit(mut start: Vec<(Tri, f64)>, h_max2: f64, max_triangles: usize) -> Vec<(Tri, f64)> {
     loop {
-        if start.len() * 4 > tol.max_triangles / 4 {
-            break;
+        if start.len() * 4 > max_triangles / 4 {
+            return start;
         }
         let mut split_any = false;
         let mut next = Vec::with_capacity(start.len() * 2);
@@ -242,13 +261,18 @@ pub fn integrate(rings: &[Vec<Point>], terms: &[Gaussian], tol: Tolerance) -> Sc
         }
         start = next;
         if !split_any {
-            break;
+            return start;
         }
     }
+}
 
+/// The adaptive phase: the piece with the largest error estimate is split
+/// until the estimate is within the tolerance (or the triangle budget is
+/// spent); [∫ g, ∫ x g, ∫ y g] re-summed over the pieces.
+fn adapt(start: Vec<(Tri, f64)>, kept: &[Gaussian], diam: f64, tol: Tolerance) -> [f64; 3] {
     let piece = |tri: Tri, sign: f64| -> Piece {
-        let h = apply(&RULE_HI, &tri, &kept);
-        let l = apply(&RULE_LO, &tri, &kept);
+        let h = apply(&RULE_HI, &tri, kept);
+        let l = apply(&RULE_LO, &tri, kept);
         let errors = [
             (h[0] - l[0]).abs(),
             (h[1] - l[1]).abs(),
@@ -289,14 +313,7 @@ pub fn integrate(rings: &[Vec<Point>], terms: &[Gaussian], tol: Tolerance) -> Sc
             *acc += x;
         }
     }
-    Scaled {
-        mass: sum[0],
-        moment: Point {
-            x: sum[1],
-            y: sum[2],
-        },
-        log_scale: s,
-    }
+    sum
 }
 
 /// [∫ g, ∫ x g, ∫ y g] over one triangle with one rule.

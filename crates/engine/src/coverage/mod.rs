@@ -104,15 +104,29 @@ where
 /// with the path a scenario document uses (`vessels[3].k`).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum InputError {
+    /// The task region is not valid.
     #[error(transparent)]
     Region(#[from] crate::geometry::RegionError),
+    /// A value is out of range or malformed.
     #[error("{field}: {reason}")]
-    Invalid { field: String, reason: String },
+    Invalid {
+        /// The offending field, as a scenario document names it.
+        field: String,
+        /// What is wrong with its value.
+        reason: String,
+    },
+    /// A well-formed value asks for something the engine does not do.
     #[error("{field}: {reason}")]
-    Unsupported { field: String, reason: String },
+    Unsupported {
+        /// The offending field, as a scenario document names it.
+        field: String,
+        /// What is not supported.
+        reason: String,
+    },
 }
 
 impl InputError {
+    /// An [`InputError::Invalid`] naming `field`, saying `reason`.
     pub fn invalid(field: impl Into<String>, reason: impl Into<String>) -> Self {
         InputError::Invalid {
             field: field.into(),

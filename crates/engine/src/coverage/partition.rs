@@ -57,16 +57,22 @@ pub enum CellGeometry {
     /// integrals over the chain are exact; [`CellGeometry::pieces`] gives clean
     /// polygons for display.
     Clipped {
+        /// The convex power cell, before Q clips it.
         hull: ConvexPolygon,
+        /// Q ∩ `hull` as an oriented chain, in world coordinates.
         rings: Vec<Vec<Point>>,
     },
     /// A cell of a fleet with different reaches β ([`mixed`](super::mixed)):
     /// its oriented boundary of segments and arcs, in world coordinates,
     /// not assembled into rings (holes and several pieces included).
-    Curved { pieces: Vec<Piece> },
+    Curved {
+        /// The boundary's pieces, the cell on the left of each.
+        pieces: Vec<Piece>,
+    },
 }
 
 impl CellGeometry {
+    /// Whether the cell is [`CellGeometry::Empty`].
     pub fn is_empty(&self) -> bool {
         matches!(self, CellGeometry::Empty)
     }

@@ -116,7 +116,10 @@ pub enum Water {
 pub struct SplitPlan {
     /// What each group covers.
     pub water: Water,
+    /// Where each vessel starts: its position as given [m].
     pub start: [Vec<Point>; 2],
+    /// Where each vessel ends: its group's optimum, pushed apart from the
+    /// other group's (step 2) [m].
     pub end: [Vec<Point>; 2],
     /// Each group's own optimum before the pushes (step 1).
     pub optimum: [Vec<Point>; 2],

@@ -47,14 +47,30 @@ use super::{Point, Region, cross, dot, norm2, segment_distance2};
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Bound {
     /// The points q with `normal · q ≤ offset` (`normal` non-zero).
-    HalfPlane { normal: Point, offset: f64 },
+    HalfPlane {
+        /// The line's normal, pointing away from the kept side (any length).
+        normal: Point,
+        /// The largest `normal · q` kept.
+        offset: f64,
+    },
     /// The points within `radius` of `centre`.
-    Disc { centre: Point, radius: f64 },
+    Disc {
+        /// The disc's centre.
+        centre: Point,
+        /// Its radius [m].
+        radius: f64,
+    },
     /// The points at least `radius` from `centre`.
-    Outside { centre: Point, radius: f64 },
+    Outside {
+        /// The centre of the disc left out.
+        centre: Point,
+        /// Its radius [m].
+        radius: f64,
+    },
 }
 
 impl Bound {
+    /// Whether `q` meets the bound (a point on its edge does).
     pub fn contains(&self, q: Point) -> bool {
         match *self {
             Bound::HalfPlane { normal, offset } => dot(normal, q) <= offset,
@@ -171,17 +187,24 @@ fn acos_from(below: f64, above: f64) -> f64 {
 /// A piece of a cell's boundary, the cell on its left.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Piece {
+    /// The straight line from `from` to `to`.
     Segment {
+        /// Where the piece starts.
         from: Point,
+        /// Where it ends.
         to: Point,
     },
     /// `centre + radius (cos θ, sin θ)` for θ from `start` to `start +
     /// sweep`: counter-clockwise when `sweep` > 0 (the cell inside the
     /// circle), clockwise when < 0 (the cell outside).
     Arc {
+        /// The circle's centre.
         centre: Point,
+        /// The circle's radius [m].
         radius: f64,
+        /// The angle θ where the arc starts [rad].
         start: f64,
+        /// The signed angle the arc turns through [rad].
         sweep: f64,
     },
 }

@@ -25,7 +25,9 @@ use super::{Point, dot};
 /// A clipping line `normal · x = offset` (any scale of `normal`).
 #[derive(Debug, Clone, Copy)]
 pub struct Line {
+    /// The line's normal (non-zero, any length).
     pub normal: Point,
+    /// `normal · x` at every point x of the line.
     pub offset: f64,
 }
 

@@ -11,6 +11,7 @@ use super::{Point, cross, dot, ring_signed_area};
 /// A convex polygon, counter-clockwise, without the closing vertex.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct ConvexPolygon {
+    /// The vertices, counter-clockwise; fewer than three: the empty polygon.
     pub vertices: Vec<Point>,
 }
 

@@ -49,15 +49,19 @@ const E2: f64 = WGS84_F * (2.0 - WGS84_F);
 /// A WGS84 position in degrees.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LatLon {
+    /// Latitude, north positive [°].
     pub lat: f64,
+    /// Longitude, east positive [°].
     pub lon: f64,
 }
 
 /// Why an origin or a position cannot be used.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum GeoError {
+    /// The latitude (given) is not finite, or |lat| ≥ 90°.
     #[error("lat: must be a finite number with |lat| < 90, got {0}")]
     Latitude(f64),
+    /// The longitude (given) is not finite, or |lon| > 180°.
     #[error("lon: must be a finite number with |lon| ≤ 180, got {0}")]
     Longitude(f64),
 }
@@ -119,6 +123,8 @@ impl LocalFrame {
     /// documented (and tested) to 1 mm within it.
     pub const RANGE: f64 = 50_000.0;
 
+    /// The plane tangent at `origin`, which must be a valid [`LatLon`]
+    /// (finite, |lat| < 90°, |lon| ≤ 180°).
     pub fn new(origin: LatLon) -> Result<LocalFrame, GeoError> {
         let origin = LatLon::new(origin.lat, origin.lon)?;
         let (lat, lon) = (origin.lat.to_radians(), origin.lon.to_radians());
@@ -134,6 +140,7 @@ impl LocalFrame {
         })
     }
 
+    /// The origin the plane is tangent at.
     pub fn origin(&self) -> LatLon {
         self.origin
     }

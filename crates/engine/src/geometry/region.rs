@@ -30,7 +30,9 @@ pub const MAX_REGION_VERTICES: usize = 100_000;
 /// Which ring of the region a problem is in.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
 pub enum RingRole {
+    /// The outer boundary (`region.polygon`).
     Shell,
+    /// The hole of this index (`region.holes[i]`).
     Hole(usize),
 }
 
@@ -46,20 +48,29 @@ impl std::fmt::Display for RingRole {
 /// Why a region was rejected.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum RegionError {
+    /// A ring has fewer than 3 distinct vertices.
     #[error("{0}: needs at least 3 distinct vertices")]
     TooFewVertices(RingRole),
+    /// A ring's vertex (its index as given) is not finite or beyond
+    /// ±[`MAX_COORDINATE`].
     #[error("{0}[{1}]: coordinate is not finite or beyond ±1e7 m")]
     CoordinateOutOfRange(RingRole, usize),
+    /// A ring encloses no area, or none to rounding for its size.
     #[error("{0}: ring has zero area (degenerate)")]
     Degenerate(RingRole),
+    /// A ring crosses or touches itself.
     #[error("{0}: ring intersects itself")]
     SelfIntersection(RingRole),
+    /// A hole is not inside the shell.
     #[error("{0}: hole is not inside the region's polygon")]
     HoleOutsideShell(RingRole),
+    /// Two rings touch or cross.
     #[error("{0} and {1} touch or intersect")]
     RingsIntersect(RingRole, RingRole),
+    /// The second hole lies inside the first.
     #[error("{1} lies inside {0}")]
     HoleInsideHole(RingRole, RingRole),
+    /// The rings have more than [`MAX_REGION_VERTICES`] vertices in all.
     #[error("region has more than {MAX_REGION_VERTICES} vertices")]
     TooManyVertices,
 }

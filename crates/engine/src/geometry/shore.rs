@@ -39,6 +39,7 @@ pub struct ShorePoint {
 }
 
 impl Shore {
+    /// Indexes the boundary of `region`: its shell and every island.
     pub fn new(region: &Region) -> Shore {
         let mut lines = Vec::new();
         for ring in std::iter::once(region.shell()).chain(region.holes().iter().map(Vec::as_slice))
@@ -54,6 +55,7 @@ impl Shore {
         }
     }
 
+    /// The region whose boundary this is.
     pub fn region(&self) -> &Region {
         &self.region
     }

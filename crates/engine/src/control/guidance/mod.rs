@@ -84,11 +84,14 @@ pub const UNBOUNDED: (f64, f64) = (f64::NEG_INFINITY, f64::INFINITY);
 /// Which guidance law.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum GuidanceMode {
+    /// The paper's law (eq. 10–13): the bow steered at the centroid.
     Paper,
+    /// The velocity over ground steered towards the centroid (the default).
     Course,
 }
 
 impl GuidanceMode {
+    /// The mode's name: `paper` or `course`.
     pub fn name(&self) -> &'static str {
         match self {
             GuidanceMode::Paper => "paper",
@@ -96,6 +99,7 @@ impl GuidanceMode {
         }
     }
 
+    /// The mode of that [`name`](Self::name); `None` for any other text.
     pub fn parse(name: &str) -> Option<Self> {
         match name {
             "paper" => Some(GuidanceMode::Paper),
@@ -109,12 +113,21 @@ impl GuidanceMode {
 /// `docs/reproducing-the-paper.md` measures.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct GuidanceGains {
+    /// Which law.
     pub mode: GuidanceMode,
+    /// The yaw-rate law's sigmoid gain k_r1 [rad/s], in
+    /// r_d = k_r1 (σ(b₁ ψ_e) − ½) + k_r2 ψ_e + ψ̇_r.
     pub k_r1: f64,
+    /// The yaw-rate law's linear gain k_r2 [1/s].
     pub k_r2: f64,
+    /// The yaw-rate law's sigmoid slope b₁ [1/rad].
     pub b1: f64,
+    /// The speed law's sigmoid gain k_u1 [m/s], in
+    /// u_d = k_u1 (σ(b₂ E) − ½) + k_u2 E + ‖Ċ‖.
     pub k_u1: f64,
+    /// The speed law's linear gain k_u2 [1/s].
     pub k_u2: f64,
+    /// The speed law's sigmoid slope b₂ [1/m].
     pub b2: f64,
     /// Inside this distance of the centroid the vessel holds station [m].
     pub arrival_radius: f64,
@@ -189,9 +202,15 @@ impl Agility {
 /// One guidance output.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Command {
+    /// Desired surge speed u_d [m/s].
     pub u_d: f64,
+    /// Desired yaw rate r_d [rad/s].
     pub r_d: f64,
+    /// The rate u̇_d [m/s²] the vessel extrapolates u_d with until the next
+    /// command.
     pub u_d_dot: f64,
+    /// The rate ṙ_d [rad/s²] the vessel extrapolates r_d with until the
+    /// next command.
     pub r_d_dot: f64,
     /// Distance to the centroid E.
     pub e: f64,
@@ -233,6 +252,7 @@ const FIRST_PERIOD: f64 = 0.1;
 /// Guidance state of one vessel (the filters need history).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Guidance {
+    /// The law and its gains.
     pub gains: GuidanceGains,
     last: Option<Last>,
     psi_r_dot: f64,
@@ -269,6 +289,8 @@ type Output = (f64, f64, f64, Option<f64>);
 const ASTERN_SWITCH: f64 = 1.9;
 
 impl Guidance {
+    /// A vessel's guidance with no history yet: astern allowed, no declared
+    /// agility, no station radius of its own.
     pub fn new(gains: GuidanceGains) -> Self {
         Guidance {
             gains,
