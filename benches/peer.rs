@@ -109,7 +109,7 @@ fn node(n: usize, seed: u64) -> Node {
             .collect(),
     };
     let mission = Mission::from_document(&doc).expect("a valid mission");
-    let actuator = wire::wire_actuator(mission.actuator.k, mission.actuator.beta);
+    let actuator = wire::wire_actuator(mission.actuator().k, mission.actuator().beta);
     let states: Vec<State> = (0..n)
         .map(|_| {
             let psi: f64 = rng.random_range(-std::f64::consts::PI..std::f64::consts::PI);
@@ -197,7 +197,7 @@ fn peer(c: &mut Criterion) {
         // The neighbours beyond reach change nothing: the same command,
         // bit for bit, and the same cell.
         let once = |neighbours: &[Neighbour]| {
-            let mut g = Guidance::new(m.guidance);
+            let mut g = Guidance::new(m.guidance());
             step(
                 m,
                 &node.own,
@@ -226,12 +226,12 @@ fn peer(c: &mut Criterion) {
             "peer/{n}: {:.1} m square, {} risk objects; the node hears {} vessels, \
              {} of them within r_i + r_j",
             (n as f64 * AREA_PER_VESSEL).sqrt(),
-            m.risk.objects().len(),
+            m.risk().objects().len(),
             node.neighbours.len(),
             node.in_reach.len(),
         );
 
-        let mut guidance = Guidance::new(m.guidance);
+        let mut guidance = Guidance::new(m.guidance());
         let mut scratch = Scratch::default();
         let mut t = 0.0;
         let mut tick = 0u64;
@@ -274,7 +274,7 @@ fn peer(c: &mut Criterion) {
             ("step", &node.neighbours),
             ("step-in-reach", &node.in_reach),
         ] {
-            let mut guidance = Guidance::new(node.mission.guidance);
+            let mut guidance = Guidance::new(node.mission.guidance());
             let mut t = 0.0;
             group.bench_function(BenchmarkId::new(name, n), |b| {
                 b.iter(|| {
@@ -305,8 +305,8 @@ fn peer(c: &mut Criterion) {
             .collect();
         let cell = |others: &[Vessel]| {
             local_cell(
-                &node.mission.region,
-                &node.mission.risk,
+                node.mission.region(),
+                node.mission.risk(),
                 me,
                 others.iter().copied(),
                 &options,

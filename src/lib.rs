@@ -25,6 +25,7 @@
 //! library.
 
 pub mod agent;
+pub mod chain;
 pub mod demo;
 pub mod load;
 pub mod recorder;

@@ -108,15 +108,15 @@ fn request(
 /// Why a link's handshake failed.
 #[derive(Debug, thiserror::Error)]
 pub enum HandshakeError {
-    #[error("bad link URL: {0}")]
+    #[error("bad link URL")]
     Url(#[source] tokio_tungstenite::tungstenite::Error),
-    #[error("connecting: {0}")]
+    #[error("connecting")]
     Connect(#[source] tokio_tungstenite::tungstenite::Error),
     /// The coordinator answered the upgrade with an HTTP error (a wrong
     /// token's 401, a 429), with its JSON error's message when it has one.
     #[error("refused with HTTP {status}: {message}")]
     Rejected { status: u16, message: String },
-    #[error("sending hello: {0}")]
+    #[error("sending hello")]
     Hello(#[source] tokio_tungstenite::tungstenite::Error),
     #[error("refused: {code}: {message}")]
     Refused { code: String, message: String },
@@ -126,7 +126,7 @@ pub enum HandshakeError {
     Unreadable(String),
     #[error("closed before the welcome")]
     Closed,
-    #[error("before the welcome: {0}")]
+    #[error("before the welcome")]
     Transport(#[source] tokio_tungstenite::tungstenite::Error),
 }
 
@@ -342,10 +342,10 @@ fn refused(
             }
         }
         HandshakeError::Refused { .. } | HandshakeError::Rejected { .. } => {
-            tracing::warn!(vessel = %config.vessel, error = %e, retry_in_ms, "the coordinator refused the link; retrying");
+            tracing::warn!(vessel = %config.vessel, error = %crate::chain::Chain(e), retry_in_ms, "the coordinator refused the link; retrying");
         }
         _ => {
-            tracing::info!(vessel = %config.vessel, error = %e, retry_in_ms, "cannot reach the coordinator; retrying");
+            tracing::info!(vessel = %config.vessel, error = %crate::chain::Chain(e), retry_in_ms, "cannot reach the coordinator; retrying");
         }
     }
     Ok(())

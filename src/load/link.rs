@@ -107,8 +107,30 @@ pub(super) async fn run_link(
     stop: CancellationToken,
 ) -> LinkOutcome {
     let mut out = LinkOutcome::default();
-    let hello = hello(&id);
-    let socket = {
+    let socket = match connect(&id, &shared, &stop).await {
+        Ok(socket) => socket,
+        Err(e) => {
+            out.problem = Some(e);
+            return out;
+        }
+    };
+    out.connected = true;
+    if let Some(problem) = drive(socket, phase, start, &shared, &stop, &mut out).await {
+        out.problem = Some(problem);
+        out.ended_at = Some(Instant::now());
+    }
+    out
+}
+
+/// The handshake, at most [`CONNECTING`](super::CONNECTING) at once;
+/// counted as settled either way, and as welcomed when it was.
+async fn connect(
+    id: &str,
+    shared: &Shared,
+    stop: &CancellationToken,
+) -> Result<crate::agent::link::Socket, String> {
+    let hello = hello(id);
+    let welcomed = {
         let _permit = shared.connecting.acquire().await;
         tokio::select! {
             _ = stop.cancelled() => Err("stopped while connecting".to_string()),
@@ -118,19 +140,22 @@ pub(super) async fn run_link(
             }
         }
     };
-    let socket = match socket {
-        Ok(welcomed) => {
-            shared.welcomed.fetch_add(1, Ordering::Relaxed);
-            shared.settled.fetch_add(1, Ordering::Relaxed);
-            welcomed.socket
-        }
-        Err(e) => {
-            shared.settled.fetch_add(1, Ordering::Relaxed);
-            out.problem = Some(e);
-            return out;
-        }
-    };
-    out.connected = true;
+    shared.settled.fetch_add(1, Ordering::Relaxed);
+    let welcomed = welcomed?;
+    shared.welcomed.fetch_add(1, Ordering::Relaxed);
+    Ok(welcomed.socket)
+}
+
+/// Poses out at the rate and commands in, until `stop` (`None`) or the
+/// link ends (why).
+async fn drive(
+    socket: crate::agent::link::Socket,
+    phase: f64,
+    start: (f64, f64, f64),
+    shared: &Shared,
+    stop: &CancellationToken,
+    out: &mut LinkOutcome,
+) -> Option<String> {
     let (mut sink, mut stream) = socket.split();
 
     let period = Duration::from_secs_f64(1.0 / shared.rate_hz);
@@ -147,14 +172,14 @@ pub(super) async fn run_link(
     let mut commanded = false;
     // Send times of the poses (in the window) awaiting their next command.
     let mut pending: Vec<Instant> = Vec::with_capacity(4);
-    let ended = loop {
+    loop {
         tokio::select! {
             // Frames before poses, so that a command's receive time is not
             // delayed by sending a pose that fell due at the same moment.
             biased;
             _ = stop.cancelled() => {
                 let _ = sink.send(Message::Close(None)).await;
-                break None;
+                return None;
             }
             frame = stream.next() => match frame {
                 Some(Ok(Message::Text(t))) => {
@@ -177,18 +202,18 @@ pub(super) async fn run_link(
                         }
                         Ok(c) if c.kind == "error" => {
                             let (code, message) = (c.code.unwrap_or_default(), c.message.unwrap_or_default());
-                            break Some(format!("error frame: {code}: {message}"));
+                            return Some(format!("error frame: {code}: {message}"));
                         }
                         Ok(c) if c.kind == "welcome" => {}
-                        Ok(c) => break Some(format!("unknown frame type {:?}", c.kind)),
-                        Err(e) => break Some(format!("unreadable frame: {e}")),
+                        Ok(c) => return Some(format!("unknown frame type {:?}", c.kind)),
+                        Err(e) => return Some(format!("unreadable frame: {e}")),
                     }
                 }
                 Some(Ok(Message::Close(frame))) => {
-                    break Some(format!("closed by the coordinator ({frame:?})"));
+                    return Some(format!("closed by the coordinator ({frame:?})"));
                 }
-                None => break Some("closed by the coordinator".into()),
-                Some(Err(e)) => break Some(format!("link error: {e}")),
+                None => return Some("closed by the coordinator".into()),
+                Some(Err(e)) => return Some(format!("link error: {e}")),
                 Some(Ok(_)) => {}
             },
             _ = ticker.tick() => {
@@ -212,7 +237,7 @@ pub(super) async fn run_link(
                 let text = serde_json::to_string(&pose).expect("serializes");
                 let sent = Instant::now();
                 if let Err(e) = sink.send(Message::text(text)).await {
-                    break Some(format!("sending a pose: {e}"));
+                    return Some(format!("sending a pose: {e}"));
                 }
                 if shared.in_window(sent) {
                     out.poses += 1;
@@ -220,10 +245,5 @@ pub(super) async fn run_link(
                 }
             }
         }
-    };
-    if let Some(problem) = ended {
-        out.problem = Some(problem);
-        out.ended_at = Some(Instant::now());
     }
-    out
 }

@@ -133,13 +133,13 @@ impl LoadConfig {
 pub enum LoadError {
     #[error("{0}")]
     Config(String),
-    #[error("GET {url}: {source}")]
+    #[error("GET {url}")]
     Http {
         url: String,
         #[source]
         source: reqwest::Error,
     },
-    #[error("the mission's region: {0}")]
+    #[error("the mission's region")]
     Region(#[from] crate::mission::scenario::ScenarioError),
     #[error("no vessel link could be opened; the first failure: {0}")]
     NoLinks(String),
@@ -398,9 +398,10 @@ mod tests {
 
     #[test]
     fn starts_are_inside_the_region_and_seeded() {
-        let region = crate::mission::Mission::paper().region;
-        let a = starts(&region, 200, 7);
-        assert_eq!(a, starts(&region, 200, 7));
+        let mission = crate::mission::Mission::paper();
+        let region = mission.region();
+        let a = starts(region, 200, 7);
+        assert_eq!(a, starts(region, 200, 7));
         assert!(a.iter().all(|&(x, y, _)| region.contains(Point { x, y })));
     }
 }

@@ -162,6 +162,130 @@ pub(super) fn opt<T>(v: Option<T>, f: impl FnOnce(T) -> String) -> String {
     v.map_or_else(|| "n/a".to_string(), f)
 }
 
+/// A row of the report's table: the figure, its value, and the target it
+/// meets (`what` of a [`TargetCheck`], or "" for none).
+type Row = (String, String, &'static str);
+
+impl LoadReport {
+    /// The links', commands' and latencies' rows.
+    fn traffic_rows(&self) -> Vec<Row> {
+        let l = &self.links;
+        let ratio = if self.commands_expected > 0.0 {
+            format!(
+                " ({:.2} %)",
+                100.0 * self.commands_received as f64 / self.commands_expected
+            )
+        } else {
+            String::new()
+        };
+        vec![
+            (
+                "links held".into(),
+                format!(
+                    "{} of {} ({} dropped, {} failed to connect)",
+                    l.held, l.requested, l.dropped, l.failed
+                ),
+                "links",
+            ),
+            (
+                "commands received / expected".into(),
+                format!(
+                    "{} / {:.0}{ratio}",
+                    self.commands_received, self.commands_expected
+                ),
+                "",
+            ),
+            (
+                "poses sent".into(),
+                format!(
+                    "{} ({:.2} Hz per link)",
+                    self.poses_sent, self.pose_rate_per_link_hz
+                ),
+                "",
+            ),
+            (
+                format!(
+                    "tick due → command received ({} tick clock), p50 / p99 / max",
+                    self.tick_clock
+                ),
+                self.tick_to_command_ms.text(),
+                "latency",
+            ),
+            (
+                "… of which the tick's first delivery (per tick)".into(),
+                self.tick_first_delivery_ms.text(),
+                "",
+            ),
+            (
+                "… and the first → last delivery of a tick (per tick)".into(),
+                self.tick_delivery_spread_ms.text(),
+                "",
+            ),
+            (
+                "pose sent → next command, p50 / p99 / max".into(),
+                self.pose_to_command_ms.text(),
+                "",
+            ),
+        ]
+    }
+
+    /// The coordinator's and the machine's rows.
+    fn machine_rows(&self) -> Vec<Row> {
+        let c = &self.coordinator;
+        let memory = match (
+            c.memory_per_vessel_bytes,
+            c.rss_before_links_bytes,
+            c.rss_with_links_bytes,
+        ) {
+            (Some(v), Some(a), Some(b)) => format!(
+                "{} ({} resident before the links, {} with them)",
+                kib(v),
+                kib(a),
+                kib(b)
+            ),
+            _ => "n/a".into(),
+        };
+        vec![
+            (
+                "tick due → command written, coordinator's histogram, p50 / p99 / max".into(),
+                c.command_delay_ms.text(),
+                "",
+            ),
+            (
+                "coordinator CPU".into(),
+                opt(c.cpu_cores, |v| format!("{v:.2} cores")),
+                "cpu",
+            ),
+            ("coordinator memory per vessel".into(), memory, "memory"),
+            (
+                "coordinator ticks".into(),
+                format!(
+                    "mean {}, {} skipped; {} commands dropped on full links",
+                    opt(c.tick_mean_ms, |v| format!("{v:.2} ms")),
+                    opt(c.ticks_skipped, |v| format!("{v:.0}")),
+                    opt(c.commands_dropped_link_full, |v| format!("{v:.0}")),
+                ),
+                "",
+            ),
+            (
+                "load client CPU (same machine)".into(),
+                opt(self.client_cpu_cores, |v| format!("{v:.2} cores")),
+                "",
+            ),
+            (
+                "this machine's CPU".into(),
+                match (self.machine_busy_percent, self.machine_steal_percent) {
+                    (Some(b), Some(s)) => {
+                        format!("{b:.0} % busy, {s:.1} % stolen by the hypervisor")
+                    }
+                    _ => "n/a".into(),
+                },
+                "",
+            ),
+        ]
+    }
+}
+
 impl fmt::Display for LoadReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(
@@ -179,131 +303,11 @@ impl fmt::Display for LoadReport {
         writeln!(f)?;
         writeln!(f, "| figure | value | target | met |")?;
         writeln!(f, "| --- | --- | --- | --- |")?;
-        let target = |what: &str| self.targets.iter().find(|t| t.what == what);
-        let row = |f: &mut fmt::Formatter<'_>, name: &str, value: String, what: &str| {
-            let (t, m) = target(what).map_or(("", ""), |t| (t.target.as_str(), yes_no(t.met)));
-            writeln!(f, "| {name} | {value} | {t} | {m} |")
-        };
-        let l = &self.links;
-        row(
-            f,
-            "links held",
-            format!(
-                "{} of {} ({} dropped, {} failed to connect)",
-                l.held, l.requested, l.dropped, l.failed
-            ),
-            "links",
-        )?;
-        let ratio = if self.commands_expected > 0.0 {
-            format!(
-                " ({:.2} %)",
-                100.0 * self.commands_received as f64 / self.commands_expected
-            )
-        } else {
-            String::new()
-        };
-        row(
-            f,
-            "commands received / expected",
-            format!(
-                "{} / {:.0}{ratio}",
-                self.commands_received, self.commands_expected
-            ),
-            "",
-        )?;
-        row(
-            f,
-            "poses sent",
-            format!(
-                "{} ({:.2} Hz per link)",
-                self.poses_sent, self.pose_rate_per_link_hz
-            ),
-            "",
-        )?;
-        row(
-            f,
-            &format!(
-                "tick due → command received ({} tick clock), p50 / p99 / max",
-                self.tick_clock
-            ),
-            self.tick_to_command_ms.text(),
-            "latency",
-        )?;
-        row(
-            f,
-            "… of which the tick's first delivery (per tick)",
-            self.tick_first_delivery_ms.text(),
-            "",
-        )?;
-        row(
-            f,
-            "… and the first → last delivery of a tick (per tick)",
-            self.tick_delivery_spread_ms.text(),
-            "",
-        )?;
-        row(
-            f,
-            "pose sent → next command, p50 / p99 / max",
-            self.pose_to_command_ms.text(),
-            "",
-        )?;
-        let c = &self.coordinator;
-        row(
-            f,
-            "tick due → command written, coordinator's histogram, p50 / p99 / max",
-            c.command_delay_ms.text(),
-            "",
-        )?;
-        row(
-            f,
-            "coordinator CPU",
-            opt(c.cpu_cores, |v| format!("{v:.2} cores")),
-            "cpu",
-        )?;
-        row(
-            f,
-            "coordinator memory per vessel",
-            match (
-                c.memory_per_vessel_bytes,
-                c.rss_before_links_bytes,
-                c.rss_with_links_bytes,
-            ) {
-                (Some(v), Some(a), Some(b)) => format!(
-                    "{} ({} resident before the links, {} with them)",
-                    kib(v),
-                    kib(a),
-                    kib(b)
-                ),
-                _ => "n/a".into(),
-            },
-            "memory",
-        )?;
-        row(
-            f,
-            "coordinator ticks",
-            format!(
-                "mean {}, {} skipped; {} commands dropped on full links",
-                opt(c.tick_mean_ms, |v| format!("{v:.2} ms")),
-                opt(c.ticks_skipped, |v| format!("{v:.0}")),
-                opt(c.commands_dropped_link_full, |v| format!("{v:.0}")),
-            ),
-            "",
-        )?;
-        row(
-            f,
-            "load client CPU (same machine)",
-            opt(self.client_cpu_cores, |v| format!("{v:.2} cores")),
-            "",
-        )?;
-        row(
-            f,
-            "this machine's CPU",
-            match (self.machine_busy_percent, self.machine_steal_percent) {
-                (Some(b), Some(s)) => format!("{b:.0} % busy, {s:.1} % stolen by the hypervisor"),
-                _ => "n/a".into(),
-            },
-            "",
-        )?;
+        for (name, value, what) in self.traffic_rows().into_iter().chain(self.machine_rows()) {
+            let target = self.targets.iter().find(|t| t.what == what);
+            let (t, m) = target.map_or(("", ""), |t| (t.target.as_str(), yes_no(t.met)));
+            writeln!(f, "| {name} | {value} | {t} | {m} |")?;
+        }
         writeln!(f)?;
         writeln!(
             f,
@@ -319,6 +323,7 @@ impl fmt::Display for LoadReport {
         Ok(())
     }
 }
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -20,14 +20,14 @@ pub const GAP: f64 = 1.0;
 pub enum InspectError {
     #[error(transparent)]
     Read(#[from] ReadError),
-    #[error("a {topic} message does not read as its schema: {source}")]
+    #[error("a {topic} message does not read as its schema")]
     Decode {
         topic: String,
         source: serde_json::Error,
     },
     #[error("{0}")]
     Unsupported(String),
-    #[error("writing: {0}")]
+    #[error("writing")]
     Io(#[from] std::io::Error),
 }
 

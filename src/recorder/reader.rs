@@ -18,14 +18,14 @@ use mcap::records::{ChunkHeader, Record, op};
 /// Why a recording could not be read.
 #[derive(Debug, thiserror::Error)]
 pub enum ReadError {
-    #[error("{path}: {source}")]
+    #[error("{path}")]
     Io {
         path: PathBuf,
         source: std::io::Error,
     },
     #[error("{path}: not an MCAP file")]
     NotMcap { path: PathBuf },
-    #[error("{path}: {source}")]
+    #[error("{path}")]
     Mcap {
         path: PathBuf,
         source: mcap::McapError,
@@ -88,10 +88,6 @@ impl Recording {
         if !bytes.starts_with(MAGIC) {
             return Err(ReadError::NotMcap { path });
         }
-        let mcap_error = |source| ReadError::Mcap {
-            path: path.clone(),
-            source,
-        };
         // A finished file: its summary has the chunk index, the channels
         // and the counts.
         let summary = if bytes.ends_with(MAGIC) && bytes.len() >= 2 * MAGIC.len() {
@@ -132,13 +128,30 @@ impl Recording {
                 recovered: false,
             });
         }
-        // Cut short (or written without an index): walk the records and
-        // keep every whole chunk, reading the channels out of them.
-        let mut chunks = Vec::new();
-        let mut channels = HashMap::new();
-        let mut counts = BTreeMap::new();
-        let mut schema_of: HashMap<u16, u16> = HashMap::new();
-        let mut schema_names: HashMap<u16, String> = HashMap::new();
+        let found = Recovery::walk(&bytes).map_err(|source| ReadError::Mcap {
+            path: path.clone(),
+            source,
+        })?;
+        Ok(found.into_recording(path, bytes))
+    }
+}
+
+/// What a walk over a file without an index (cut short, or written
+/// without one) finds: every whole chunk, and the channels and counts read
+/// out of them.
+#[derive(Default)]
+struct Recovery {
+    chunks: Vec<ChunkRef>,
+    channels: HashMap<u16, Channel>,
+    counts: BTreeMap<u16, u64>,
+    schema_of: HashMap<u16, u16>,
+    schema_names: HashMap<u16, String>,
+}
+
+impl Recovery {
+    /// Walks the records up to the first one cut short or broken.
+    fn walk(bytes: &[u8]) -> Result<Recovery, mcap::McapError> {
+        let mut found = Recovery::default();
         let mut at = MAGIC.len();
         while at + 9 <= bytes.len() {
             let opcode = bytes[at];
@@ -148,69 +161,76 @@ impl Recording {
                 break; // the record the process was writing when it died
             }
             match opcode {
-                op::CHUNK => {
-                    let Ok(Record::Chunk { header, data }) =
-                        mcap::read::parse_record(op::CHUNK, &bytes[body.clone()])
-                    else {
-                        break;
-                    };
-                    let mut present = BTreeSet::new();
-                    let mut whole = true;
-                    for record in
-                        mcap::read::ChunkReader::new(header.clone(), &data).map_err(mcap_error)?
-                    {
-                        match record {
-                            Ok(Record::Channel(c)) => {
-                                channels.entry(c.id).or_insert(Channel {
-                                    topic: c.topic.as_str().into(),
-                                    schema_name: String::new(),
-                                    message_encoding: c.message_encoding.clone(),
-                                });
-                                schema_of.entry(c.id).or_insert(c.schema_id);
-                            }
-                            Ok(Record::Schema { header, .. }) => {
-                                schema_names.insert(header.id, header.name.clone());
-                            }
-                            Ok(Record::Message { header, .. }) => {
-                                present.insert(header.channel_id);
-                                *counts.entry(header.channel_id).or_insert(0) += 1;
-                            }
-                            Ok(_) => {}
-                            Err(_) => {
-                                whole = false;
-                                break;
-                            }
-                        }
-                    }
-                    if !whole {
-                        break;
-                    }
-                    chunks.push(ChunkRef {
-                        start: header.message_start_time,
-                        end: header.message_end_time,
-                        body,
-                        channels: Some(present),
-                    });
-                }
+                op::CHUNK if !found.chunk(bytes, body)? => break,
                 op::DATA_END | op::FOOTER => break,
                 _ => {}
             }
             at = (at + 9).saturating_add(len as usize);
         }
-        for (id, channel) in channels.iter_mut() {
-            if let Some(name) = schema_of.get(id).and_then(|s| schema_names.get(s)) {
+        Ok(found)
+    }
+
+    /// Takes in the chunk at `body`; `false` when it is not whole.
+    fn chunk(
+        &mut self,
+        bytes: &[u8],
+        body: std::ops::Range<usize>,
+    ) -> Result<bool, mcap::McapError> {
+        let Ok(Record::Chunk { header, data }) =
+            mcap::read::parse_record(op::CHUNK, &bytes[body.clone()])
+        else {
+            return Ok(false);
+        };
+        let mut present = BTreeSet::new();
+        for record in mcap::read::ChunkReader::new(header.clone(), &data)? {
+            match record {
+                Ok(Record::Channel(c)) => {
+                    self.channels.entry(c.id).or_insert(Channel {
+                        topic: c.topic.as_str().into(),
+                        schema_name: String::new(),
+                        message_encoding: c.message_encoding.clone(),
+                    });
+                    self.schema_of.entry(c.id).or_insert(c.schema_id);
+                }
+                Ok(Record::Schema { header, .. }) => {
+                    self.schema_names.insert(header.id, header.name.clone());
+                }
+                Ok(Record::Message { header, .. }) => {
+                    present.insert(header.channel_id);
+                    *self.counts.entry(header.channel_id).or_insert(0) += 1;
+                }
+                Ok(_) => {}
+                Err(_) => return Ok(false),
+            }
+        }
+        self.chunks.push(ChunkRef {
+            start: header.message_start_time,
+            end: header.message_end_time,
+            body,
+            channels: Some(present),
+        });
+        Ok(true)
+    }
+
+    fn into_recording(mut self, path: PathBuf, bytes: Vec<u8>) -> Recording {
+        for (id, channel) in self.channels.iter_mut() {
+            if let Some(name) = self
+                .schema_of
+                .get(id)
+                .and_then(|s| self.schema_names.get(s))
+            {
                 channel.schema_name = name.clone();
             }
         }
-        chunks.sort_by_key(|c| (c.start, c.body.start));
-        Ok(Recording {
+        self.chunks.sort_by_key(|c| (c.start, c.body.start));
+        Recording {
             path,
             bytes,
-            channels,
-            chunks,
-            counts,
+            channels: self.channels,
+            chunks: self.chunks,
+            counts: self.counts,
             recovered: true,
-        })
+        }
     }
 }
 

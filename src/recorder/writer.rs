@@ -190,7 +190,7 @@ impl Writer {
             return;
         }
         if let Err(e) = f(self) {
-            tracing::error!(error = %e, "recording stopped; the coordinator goes on without it");
+            tracing::error!(error = %crate::chain::Chain(&e), "recording stopped; the coordinator goes on without it");
             metrics::counter!(ERRORS).increment(1);
             metrics::gauge!(ACTIVE).set(0.0);
             self.failed = true;

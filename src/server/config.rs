@@ -122,17 +122,17 @@ impl Default for Settings {
 
 #[derive(Debug, thiserror::Error)]
 pub enum ConfigError {
-    #[error("reading {path}: {source}")]
+    #[error("reading {path}")]
     Read {
         path: PathBuf,
         source: std::io::Error,
     },
-    #[error("{path}: {source}")]
+    #[error("{path}")]
     Syntax {
         path: PathBuf,
         source: Box<toml::de::Error>,
     },
-    #[error("{path}: {source}")]
+    #[error("{path}")]
     Invalid { path: PathBuf, source: ApiError },
 }
 
@@ -268,8 +268,8 @@ mod tests {
         assert_eq!(doc.safety.safety_distance, 8.0);
         assert!(doc.safety.filter);
         let off = Settings::parse("[safety]\nfilter = false\nsafety_distance = 12").unwrap();
-        assert!(!off.mission.safety.filter);
-        assert_eq!(off.mission.safety.safety_distance, 12.0);
+        assert!(!off.mission.safety().filter);
+        assert_eq!(off.mission.safety().safety_distance, 12.0);
     }
 
     #[test]
@@ -294,7 +294,7 @@ mod tests {
         let s = Settings::parse("origin = { lat = -35.363261, lon = 149.16523 }").unwrap();
         let origin = s.mission.document().origin.unwrap();
         assert_eq!((origin.lat, origin.lon), (-35.363261, 149.16523));
-        assert_eq!(Settings::parse("").unwrap().mission.origin, None);
+        assert_eq!(Settings::parse("").unwrap().mission.origin(), None);
     }
 
     #[test]

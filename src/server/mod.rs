@@ -95,13 +95,13 @@ pub enum ServeError {
         "refusing to bind {0} without a token: only loopback addresses may be served unauthenticated"
     )]
     PublicWithoutToken(SocketAddr),
-    #[error("serving: {0}")]
+    #[error("serving")]
     Io(#[from] std::io::Error),
     #[error(transparent)]
     Store(#[from] store::StoreError),
-    #[error("--peer: {0}")]
+    #[error("--peer")]
     Peer(#[from] crate::agent::peer::PeerError),
-    #[error("the mission stored in {path} is not valid: {source}")]
+    #[error("the mission stored in {path} is not valid")]
     StoredMission {
         path: PathBuf,
         source: crate::mission::MissionError,
@@ -252,7 +252,7 @@ pub async fn prepare(
         }
         None => (Recorder::off(), None),
     };
-    let clock = MissionClock::first_tick_now(config.time_warp, mission.tick_hz);
+    let clock = MissionClock::first_tick_now(config.time_warp, mission.tick_hz());
     let (coordinator, snapshot) = Coordinator::new(
         mission,
         TickSettings {
@@ -315,7 +315,7 @@ impl Prepared {
             let (app, stop) = (app.clone(), shutdown.clone());
             tracker.spawn(async move {
                 if let Err(e) = self::peer::run(member, app, stop).await {
-                    tracing::error!(error = %e, "the peer fleet member stopped");
+                    tracing::error!(error = %crate::chain::Chain(&e), "the peer fleet member stopped");
                 }
             });
         }

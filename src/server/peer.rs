@@ -511,7 +511,7 @@ impl Member<'_> {
         match doc {
             Some(doc) if differs(&doc) && !self.replace => {
                 if let Err(e) = adopt(self.app, &doc).await {
-                    tracing::warn!(error = %e, "the fleet's newer mission was not taken");
+                    tracing::warn!(error = %crate::chain::Chain(&e), "the fleet's newer mission was not taken");
                     return false;
                 }
                 self.revision = doc.revision;

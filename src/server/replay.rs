@@ -404,7 +404,7 @@ impl Player {
                     }));
                 }
             }
-            Ok(Err(e)) => tracing::warn!(error = %e, "reading the recording"),
+            Ok(Err(e)) => tracing::warn!(error = %crate::chain::Chain(&e), "reading the recording"),
             Err(e) => tracing::warn!(error = %e, "reading the recording"),
         }
     }

@@ -39,19 +39,19 @@ pub(super) const FILE_NAME: &str = "mission.redb";
 
 #[derive(Debug, thiserror::Error)]
 pub enum StoreError {
-    #[error("creating the data directory {path}: {source}")]
+    #[error("creating the data directory {path}")]
     Directory {
         path: PathBuf,
         source: std::io::Error,
     },
-    #[error("opening the store {path}: {source}")]
+    #[error("opening the store {path}")]
     Open {
         path: PathBuf,
         source: Box<redb::DatabaseError>,
     },
-    #[error("store: {0}")]
+    #[error("the store")]
     Redb(#[from] Box<redb::Error>),
-    #[error("store: a stored {what} does not parse: {source}")]
+    #[error("the store: a stored {what} does not parse")]
     Corrupt {
         what: String,
         source: serde_json::Error,

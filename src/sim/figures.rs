@@ -11,6 +11,8 @@ use std::path::Path;
 use std::sync::Once;
 
 use plotters::coord::Shift;
+use plotters::coord::cartesian::Cartesian2d;
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use plotters::style::colors::colormaps::{ColorMap, ViridisRGB};
 
@@ -415,75 +417,19 @@ fn evolution<DB: DrawingBackend>(
                 })
             }))
             .map_err(err)?;
-        // Region outline and holes.
-        let ring = |r: &[crate::geometry::Point]| {
-            let mut pts: Vec<(f64, f64)> = r.iter().map(|p| (p.x, p.y)).collect();
-            pts.push(pts[0]);
-            pts
-        };
-        chart
-            .draw_series(std::iter::once(PathElement::new(
-                ring(region.shell()),
-                BLACK.stroke_width(2),
-            )))
-            .map_err(err)?;
-        for h in region.holes() {
-            chart
-                .draw_series(std::iter::once(Polygon::new(
-                    ring(h),
-                    BLACK.mix(0.6).filled(),
-                )))
-                .map_err(err)?;
-        }
-        // Cells.
-        for cell in &snap.cells {
-            if matches!(cell, CellGeometry::Empty) {
-                continue;
-            }
-            for piece in cell.pieces(region).0 {
-                let pts: Vec<(f64, f64)> = piece.exterior().coords().map(|c| (c.x, c.y)).collect();
-                chart
-                    .draw_series(std::iter::once(PathElement::new(
-                        pts,
-                        WHITE.stroke_width(2),
-                    )))
-                    .map_err(err)?;
-            }
-        }
+        outline_and_cells(&mut chart, region, &snap.cells)?;
         // Trails, vessels (diamonds) and centroids (crosses).
-        let upto = run.ticks.iter().take_while(|t| t.t <= snap.t + 1e-9);
-        let upto: Vec<&super::Tick> = upto.collect();
-        for i in 0..config.scenario.ids.len() {
-            let color = Palette99::pick(i).to_rgba();
-            let trail: Vec<(f64, f64)> = upto
-                .iter()
-                .map(|t| (t.vessels[i].state.x, t.vessels[i].state.y))
-                .collect();
-            chart
-                .draw_series(std::iter::once(PathElement::new(
-                    trail,
-                    color.stroke_width(2),
-                )))
-                .map_err(err)?;
-            if let Some(last) = upto.last() {
-                let v = &last.vessels[i];
-                let (x, y) = (v.state.x, v.state.y);
-                let s = 0.012 * (x1 - x0);
-                chart
-                    .draw_series(std::iter::once(Polygon::new(
-                        vec![(x + s, y), (x, y + s), (x - s, y), (x, y - s)],
-                        color.filled(),
-                    )))
-                    .map_err(err)?;
-                chart
-                    .draw_series(std::iter::once(Cross::new(
-                        (v.centroid.x, v.centroid.y),
-                        5,
-                        WHITE.stroke_width(2),
-                    )))
-                    .map_err(err)?;
-            }
-        }
+        let upto: Vec<&super::Tick> = run
+            .ticks
+            .iter()
+            .take_while(|t| t.t <= snap.t + 1e-9)
+            .collect();
+        positions(
+            &mut chart,
+            config.scenario.ids.len(),
+            &upto,
+            0.012 * (x1 - x0),
+        )?;
     }
     Ok(())
 }
@@ -527,11 +473,120 @@ fn trails<DB: DrawingBackend>(
         .label_style(("sans-serif", 14))
         .draw()
         .map_err(err)?;
-    let ring = |r: &[crate::geometry::Point]| {
-        let mut pts: Vec<(f64, f64)> = r.iter().map(|p| (p.x, p.y)).collect();
-        pts.push(pts[0]);
-        pts
-    };
+    land_and_water(&mut chart, region, (x0, x1, y0, y1))?;
+    // Final cells.
+    if let Some(snap) = run.snapshots.last() {
+        for cell in &snap.cells {
+            for piece in cell.pieces(region).0 {
+                let pts: Vec<(f64, f64)> = piece.exterior().coords().map(|c| (c.x, c.y)).collect();
+                chart
+                    .draw_series(std::iter::once(PathElement::new(
+                        pts,
+                        RGBColor(90, 110, 140).stroke_width(1),
+                    )))
+                    .map_err(err)?;
+            }
+        }
+    }
+    tracks(&mut chart, config, run, last, 1300.0 / (x1 - x0))?;
+    Ok(())
+}
+
+/// A chart on the local plane.
+type Plane<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
+/// A closed ring's points, the first repeated at the end.
+fn ring(r: &[crate::geometry::Point]) -> Vec<(f64, f64)> {
+    let mut pts: Vec<(f64, f64)> = r.iter().map(|p| (p.x, p.y)).collect();
+    pts.push(pts[0]);
+    pts
+}
+
+/// Fig. 4's region outline, its islands and the cells.
+fn outline_and_cells<DB: DrawingBackend>(
+    chart: &mut Plane<'_, DB>,
+    region: &crate::geometry::Region,
+    cells: &[CellGeometry],
+) -> Result<(), String> {
+    chart
+        .draw_series(std::iter::once(PathElement::new(
+            ring(region.shell()),
+            BLACK.stroke_width(2),
+        )))
+        .map_err(err)?;
+    for h in region.holes() {
+        chart
+            .draw_series(std::iter::once(Polygon::new(
+                ring(h),
+                BLACK.mix(0.6).filled(),
+            )))
+            .map_err(err)?;
+    }
+    for cell in cells {
+        if matches!(cell, CellGeometry::Empty) {
+            continue;
+        }
+        for piece in cell.pieces(region).0 {
+            let pts: Vec<(f64, f64)> = piece.exterior().coords().map(|c| (c.x, c.y)).collect();
+            chart
+                .draw_series(std::iter::once(PathElement::new(
+                    pts,
+                    WHITE.stroke_width(2),
+                )))
+                .map_err(err)?;
+        }
+    }
+    Ok(())
+}
+
+/// Fig. 4's trails over `upto`, each vessel's last position (a diamond of
+/// half-width `s`) and its centroid (a cross).
+fn positions<DB: DrawingBackend>(
+    chart: &mut Plane<'_, DB>,
+    n: usize,
+    upto: &[&super::Tick],
+    s: f64,
+) -> Result<(), String> {
+    for i in 0..n {
+        let color = Palette99::pick(i).to_rgba();
+        let trail: Vec<(f64, f64)> = upto
+            .iter()
+            .map(|t| (t.vessels[i].state.x, t.vessels[i].state.y))
+            .collect();
+        chart
+            .draw_series(std::iter::once(PathElement::new(
+                trail,
+                color.stroke_width(2),
+            )))
+            .map_err(err)?;
+        if let Some(last) = upto.last() {
+            let v = &last.vessels[i];
+            let (x, y) = (v.state.x, v.state.y);
+            chart
+                .draw_series(std::iter::once(Polygon::new(
+                    vec![(x + s, y), (x, y + s), (x - s, y), (x, y - s)],
+                    color.filled(),
+                )))
+                .map_err(err)?;
+            chart
+                .draw_series(std::iter::once(Cross::new(
+                    (v.centroid.x, v.centroid.y),
+                    5,
+                    WHITE.stroke_width(2),
+                )))
+                .map_err(err)?;
+        }
+    }
+    Ok(())
+}
+
+/// Fig. 5's ground: land everywhere, water inside the shell, land again on
+/// the islands, their shores outlined.
+fn land_and_water<DB: DrawingBackend>(
+    chart: &mut Plane<'_, DB>,
+    region: &crate::geometry::Region,
+    (x0, x1, y0, y1): (f64, f64, f64, f64),
+) -> Result<(), String> {
     let land = RGBColor(214, 196, 150);
     let water = RGBColor(222, 236, 248);
     // Land everywhere, water inside the shell, land again on the islands.
@@ -564,22 +619,18 @@ fn trails<DB: DrawingBackend>(
             BLACK.stroke_width(2),
         )))
         .map_err(err)?;
-    // Final cells.
-    if let Some(snap) = run.snapshots.last() {
-        for cell in &snap.cells {
-            for piece in cell.pieces(region).0 {
-                let pts: Vec<(f64, f64)> = piece.exterior().coords().map(|c| (c.x, c.y)).collect();
-                chart
-                    .draw_series(std::iter::once(PathElement::new(
-                        pts,
-                        RGBColor(90, 110, 140).stroke_width(1),
-                    )))
-                    .map_err(err)?;
-            }
-        }
-    }
-    // Trails, starts (small circles), the hull disc at the end, goals (×).
-    let px_per_m = 1300.0 / (x1 - x0);
+    Ok(())
+}
+
+/// Fig. 5's vessels: trails, starts (small circles), the hull disc at the
+/// end (`px_per_m` to size it) and the goals (×).
+fn tracks<DB: DrawingBackend>(
+    chart: &mut Plane<'_, DB>,
+    config: &Config,
+    run: &Run,
+    last: &super::Tick,
+    px_per_m: f64,
+) -> Result<(), String> {
     for i in 0..config.scenario.ids.len() {
         let color = Palette99::pick(i).to_rgba();
         let trail: Vec<(f64, f64)> = run

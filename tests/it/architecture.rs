@@ -22,7 +22,7 @@ const LAYERS: &[(&str, &[&str])] = &[
     ("core", &["geometry", "coverage", "control"]),
     ("protocol", &["protocol"]),
     ("mission", &["mission"]),
-    ("recorder", &["recorder"]),
+    ("recorder", &["recorder", "chain"]),
     ("shell", &["sim", "agent", "server", "load"]),
     ("demo", &["demo"]),
 ];

@@ -87,7 +87,7 @@ fn mission_file(dir: &Path) -> (PathBuf, Mission) {
     let mission = Mission::from_text(&std::fs::read_to_string(&path).unwrap())
         .expect("the mission file reads back");
     assert!(
-        mission.origin.is_some(),
+        mission.origin().is_some(),
         "the mission has the boats' origin"
     );
     (path, mission)
@@ -112,12 +112,12 @@ fn coverage(m: &Mission, at: &[(f64, f64)]) -> Evaluation {
         .iter()
         .map(|&(x, y)| Vessel {
             position: Point { x, y },
-            k: m.actuator.k,
-            beta: m.actuator.beta,
+            k: m.actuator().k,
+            beta: m.actuator().beta,
         })
         .collect();
     let fleet = Fleet::new(vessels).expect("boats in the region make a fleet");
-    evaluate(&m.region, &m.risk, &fleet, &Options::default())
+    evaluate(m.region(), m.risk(), &fleet, &Options::default())
 }
 
 /// Where a fleet stands: each boat's distance to its centroid (E), H, and

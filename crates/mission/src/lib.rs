@@ -51,26 +51,78 @@ pub use convert::{
 pub use error::MissionError;
 use scenario::{Scenario, ScenarioError};
 
-/// The mission: what to cover and how.
+/// The mission: what to cover and how. Always valid: it is made only by
+/// [`Mission::paper`], [`Mission::from_document`] and
+/// [`Mission::from_text`], which validate, and changed only through
+/// [`MissionChange`]s, which validate again; its parts are read through
+/// the accessors below.
 #[derive(Debug, Clone)]
 pub struct Mission {
-    /// The WGS84 origin of the local plane, when geo-referenced; validated
-    /// ([`seacover_engine::geometry::geodesy::LocalFrame::new`]).
-    pub origin: Option<OriginDocument>,
-    pub region_doc: RegionDocument,
-    pub risk_doc: RiskDocument,
-    pub region: Region,
-    pub risk: RiskField,
-    pub actuator: ActuatorDocument,
-    pub guidance: GuidanceGains,
-    pub tick_hz: f64,
-    pub safety: SafetyParams,
-    /// The region's shore and route map with `safety`: rebuilt whenever
-    /// either changes, shared by the mission's clones.
-    pub layer: Arc<SafetyLayer>,
+    origin: Option<OriginDocument>,
+    region_doc: RegionDocument,
+    risk_doc: RiskDocument,
+    region: Region,
+    risk: RiskField,
+    actuator: ActuatorDocument,
+    guidance: GuidanceGains,
+    tick_hz: f64,
+    safety: SafetyParams,
+    layer: Arc<SafetyLayer>,
 }
 
 impl Mission {
+    /// The WGS84 origin of the local plane, when geo-referenced; validated
+    /// ([`seacover_engine::geometry::geodesy::LocalFrame::new`]).
+    pub fn origin(&self) -> Option<OriginDocument> {
+        self.origin
+    }
+
+    /// The region as its document gave it.
+    pub fn region_doc(&self) -> &RegionDocument {
+        &self.region_doc
+    }
+
+    /// The risk as its document gave it, every object with an id.
+    pub fn risk_doc(&self) -> &RiskDocument {
+        &self.risk_doc
+    }
+
+    /// The task region Q.
+    pub fn region(&self) -> &Region {
+        &self.region
+    }
+
+    /// The risk density Φ (paper eq. 5).
+    pub fn risk(&self) -> &RiskField {
+        &self.risk
+    }
+
+    /// The actuator of vessels that do not declare their own.
+    pub fn actuator(&self) -> ActuatorDocument {
+        self.actuator
+    }
+
+    /// The guidance gains.
+    pub fn guidance(&self) -> GuidanceGains {
+        self.guidance
+    }
+
+    /// The coverage tick rate [Hz of mission time].
+    pub fn tick_hz(&self) -> f64 {
+        self.tick_hz
+    }
+
+    /// The safety parameters.
+    pub fn safety(&self) -> SafetyParams {
+        self.safety
+    }
+
+    /// The region's shore and route map with [`Mission::safety`]: rebuilt
+    /// whenever either changes, shared by the mission's clones.
+    pub fn layer(&self) -> &Arc<SafetyLayer> {
+        &self.layer
+    }
+
     /// The paper's scenario (region, risk, actuator), default guidance, 10 Hz.
     pub fn paper() -> Mission {
         let doc =

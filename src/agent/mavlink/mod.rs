@@ -92,8 +92,8 @@ pub enum BridgeError {
          longitude, which need one (PUT /api/v1/mission/origin {{\"lat\": …, \"lon\": …}})"
     )]
     NoOrigin,
-    #[error("the mission's origin is not valid: {0}")]
-    Origin(crate::geometry::geodesy::GeoError),
+    #[error("the mission's origin is not valid")]
+    Origin(#[source] crate::geometry::geodesy::GeoError),
     /// A vehicle's link gave up (its token refused): the bridge stops.
     #[error(transparent)]
     Link(#[from] link::LinkError),
@@ -206,16 +206,15 @@ fn frame_of(origin: OriginDocument) -> Result<LocalFrame, BridgeError> {
     .map_err(BridgeError::Origin)
 }
 
-/// Runs the bridge until `shutdown`. Fails only at start: a coordinator
-/// that cannot be read, a mission without an origin, a malformed endpoint.
-pub async fn run(config: BridgeConfig, shutdown: CancellationToken) -> Result<(), BridgeError> {
-    for e in &config.endpoints {
-        mavlink::ConnectionAddress::parse_address(e).map_err(|source| BridgeError::Endpoint {
-            endpoint: e.clone(),
-            source,
-        })?;
-    }
-    let tasks = TaskTracker::new();
+/// Where the boats are placed: the coordinator's link URL (none in a peer
+/// fleet) and the mission's local frame, which a task started here keeps
+/// following (the coordinator's origin, or the fleet's mission). `None`
+/// when shut down while waiting for the fleet's mission.
+async fn placed(
+    config: &BridgeConfig,
+    tasks: &TaskTracker,
+    shutdown: &CancellationToken,
+) -> Result<Option<(String, watch::Receiver<LocalFrame>)>, BridgeError> {
     let (url, frames, frame) = match &config.peer {
         None => {
             let url = link::link_url(&config.server)
@@ -225,7 +224,7 @@ pub async fn run(config: BridgeConfig, shutdown: CancellationToken) -> Result<()
                 .timeout(Duration::from_secs(5))
                 .build()
                 .expect("a plain HTTP client builds");
-            let origin = fetch_origin(&http, &config)
+            let origin = fetch_origin(&http, config)
                 .await?
                 .ok_or(BridgeError::NoOrigin)?;
             let (frames, frame) = watch::channel(frame_of(origin)?);
@@ -245,7 +244,7 @@ pub async fn run(config: BridgeConfig, shutdown: CancellationToken) -> Result<()
                 let origin = missions
                     .borrow_and_update()
                     .as_ref()
-                    .map(|r| r.mission.origin);
+                    .map(|r| r.mission.origin());
                 match origin {
                     Some(Some(o)) => break o,
                     Some(None) => return Err(BridgeError::NoOrigin),
@@ -254,8 +253,8 @@ pub async fn run(config: BridgeConfig, shutdown: CancellationToken) -> Result<()
                             "waiting for the fleet's mission (its origin places the boats)"
                         );
                         tokio::select! {
-                            _ = shutdown.cancelled() => return Ok(()),
-                            changed = missions.changed() => if changed.is_err() { return Ok(()) },
+                            _ = shutdown.cancelled() => return Ok(None),
+                            changed = missions.changed() => if changed.is_err() { return Ok(None) },
                         }
                     }
                 }
@@ -272,6 +271,22 @@ pub async fn run(config: BridgeConfig, shutdown: CancellationToken) -> Result<()
     if let Some((frames, missions)) = frames {
         tasks.spawn(follow_fleet_origin(missions, frames, shutdown.clone()));
     }
+    Ok(Some((url, frame)))
+}
+
+/// Runs the bridge until `shutdown`. Fails only at start: a coordinator
+/// that cannot be read, a mission without an origin, a malformed endpoint.
+pub async fn run(config: BridgeConfig, shutdown: CancellationToken) -> Result<(), BridgeError> {
+    for e in &config.endpoints {
+        mavlink::ConnectionAddress::parse_address(e).map_err(|source| BridgeError::Endpoint {
+            endpoint: e.clone(),
+            source,
+        })?;
+    }
+    let tasks = TaskTracker::new();
+    let Some((url, frame)) = placed(&config, &tasks, &shutdown).await? else {
+        return Ok(());
+    };
 
     let tally = Arc::new(Tally::default());
     let (incoming_tx, mut incoming) = mpsc::channel::<Incoming>(1024);
@@ -693,12 +708,16 @@ async fn follow_origin(
                     frames.send_replace(f);
                 }
                 Ok(_) => {}
-                Err(e) => tracing::warn!(error = %e, "keeping the previous origin"),
+                Err(e) => {
+                    tracing::warn!(error = %crate::chain::Chain(&e), "keeping the previous origin")
+                }
             },
             Ok(None) => {
                 tracing::warn!("the mission no longer has an origin; keeping the previous one")
             }
-            Err(e) => tracing::debug!(error = %e, "origin not read this time"),
+            Err(e) => {
+                tracing::debug!(error = %crate::chain::Chain(&e), "origin not read this time")
+            }
         }
     }
 }
@@ -718,14 +737,16 @@ async fn follow_fleet_origin(
         let origin = missions
             .borrow_and_update()
             .as_ref()
-            .and_then(|r| r.mission.origin);
+            .and_then(|r| r.mission.origin());
         match origin.map(frame_of) {
             Some(Ok(f)) if f != *frames.borrow() => {
                 tracing::info!("the mission's origin moved");
                 frames.send_replace(f);
             }
             Some(Ok(_)) => {}
-            Some(Err(e)) => tracing::warn!(error = %e, "keeping the previous origin"),
+            Some(Err(e)) => {
+                tracing::warn!(error = %crate::chain::Chain(&e), "keeping the previous origin")
+            }
             None => tracing::warn!("the mission no longer has an origin; keeping the previous one"),
         }
     }

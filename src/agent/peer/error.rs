@@ -11,12 +11,12 @@ pub enum PeerError {
     Fleet,
     #[error("zenoh configuration: {0}")]
     Config(String),
-    #[error("cannot read {path}: {source}")]
+    #[error("cannot read {path}")]
     Read {
         path: PathBuf,
         source: std::io::Error,
     },
-    #[error("the mission in {path}: {source}")]
+    #[error("the mission in {path}")]
     Mission { path: PathBuf, source: MissionError },
     #[error(
         "a peer fleet's vessel id is at most 7 characters of [A-Za-z0-9_.-] (the beacon's 96 bytes): {0:?}"

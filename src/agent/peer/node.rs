@@ -56,6 +56,33 @@ struct Shared {
 }
 
 impl Shared {
+    /// A beacon heard on `key`: filed in the table (marked local when it
+    /// is this member's own, as sent), and the asker woken when it shows a
+    /// newer mission revision than the one held.
+    fn on_beacon(&self, key: &str, bytes: &[u8]) {
+        let local = wire::Keys::parse_beacon(key).is_some_and(|(_, id)| {
+            self.sent
+                .lock()
+                .expect("sent lock")
+                .get(id)
+                .map(|b| b.as_slice())
+                == Some(bytes)
+        });
+        let ageing = self.config.ageing;
+        let rev = self.table.lock().expect("table lock").offer(
+            key,
+            bytes,
+            local,
+            Instant::now(),
+            utc_now(),
+            &ageing,
+        );
+        let held = self.mission.borrow().as_ref().map(|r| r.revision);
+        if rev.is_some_and(|rev| held.is_none_or(|h| rev > h)) {
+            self.behind.notify_one();
+        }
+    }
+
     /// An answer to this member's own query: the fleet's members answer
     /// with whatever revision they hold, most of them the one this member
     /// already has or an older one; only a newer one is news (the rest are
@@ -85,7 +112,7 @@ impl Shared {
                     .mission
                     .borrow()
                     .as_ref()
-                    .map(|r| r.mission.region.clone());
+                    .map(|r| r.mission.region().clone());
                 self.table.lock().expect("table lock").set_region(region);
                 let rev = self.mission.borrow().as_ref().map(|r| r.revision);
                 if let Some(rev) = rev {
@@ -153,29 +180,7 @@ impl Member {
         session
             .declare_subscriber(Keys::all_beacons())
             .callback(move |sample| {
-                let key = sample.key_expr().as_str();
-                let bytes = sample.payload().to_bytes();
-                let local = wire::Keys::parse_beacon(key).is_some_and(|(_, id)| {
-                    s.sent
-                        .lock()
-                        .expect("sent lock")
-                        .get(id)
-                        .map(|b| b.as_slice())
-                        == Some(&bytes[..])
-                });
-                let ageing = s.config.ageing;
-                let rev = s.table.lock().expect("table lock").offer(
-                    key,
-                    &bytes,
-                    local,
-                    Instant::now(),
-                    utc_now(),
-                    &ageing,
-                );
-                let held = s.mission.borrow().as_ref().map(|r| r.revision);
-                if rev.is_some_and(|rev| held.is_none_or(|h| rev > h)) {
-                    s.behind.notify_one();
-                }
+                s.on_beacon(sample.key_expr().as_str(), &sample.payload().to_bytes());
             })
             .background()
             .await
@@ -200,49 +205,11 @@ impl Member {
             .background()
             .await
             .map_err(zerr)?;
-        // Until a mission is held, and whenever a neighbour's beacon shows a
-        // newer revision than the one held (one published while this member
-        // was cut off, or a put lost on UDP), ask the fleet for it: at once
-        // when such a beacon arrives, then again every second while behind,
-        // but never more often than every 200 ms.
-        let (s, z, stop) = (shared.clone(), session.clone(), shutdown.clone());
-        tasks.spawn(async move {
-            while !stop.is_cancelled() {
-                let held = s.mission.borrow().as_ref().map(|r| r.revision);
-                let newest = s.table.lock().expect("table lock").newest_revision();
-                let behind = match held {
-                    None => true,
-                    Some(h) => newest.is_some_and(|n| n > h),
-                };
-                // No consolidation: Zenoh's default for a get (`Latest`)
-                // holds every reply back until the last member has
-                // answered, then keeps one per key, without timestamps the
-                // last to arrive, often a neighbour's older revision. Each
-                // answer is taken as it comes; the board keeps the newest.
-                if behind
-                    && let Ok(replies) = z
-                        .get(s.keys.mission())
-                        .consolidation(ConsolidationMode::None)
-                        .timeout(Duration::from_secs(1))
-                        .await
-                {
-                    while let Ok(reply) = replies.recv_async().await {
-                        if let Ok(sample) = reply.result() {
-                            s.offer_answer(&sample.payload().to_bytes());
-                        }
-                    }
-                }
-                let woken = async {
-                    tokio::time::sleep(Duration::from_millis(200)).await;
-                    s.behind.notified().await;
-                };
-                tokio::select! {
-                    _ = stop.cancelled() => break,
-                    _ = tokio::time::sleep(Duration::from_secs(1)) => {}
-                    _ = woken => {}
-                }
-            }
-        });
+        tasks.spawn(ask_while_behind(
+            shared.clone(),
+            session.clone(),
+            shutdown.clone(),
+        ));
         Ok(Arc::new(Member { session, shared }))
     }
 
@@ -300,7 +267,7 @@ impl Member {
                     let Some(p) = poses.borrow_and_update().clone() else { continue };
                     // One step per mission tick of the hull's own clock (a
                     // clock that went back, a rebooted autopilot, restarts it).
-                    let period = v.current.as_ref().map_or(0.1, |r| 1.0 / r.mission.tick_hz);
+                    let period = v.current.as_ref().map_or(0.1, |r| 1.0 / r.mission.tick_hz());
                     let due = last_step.is_none_or(|l| p.t - l >= period - 1e-6 || p.t < l);
                     if due
                         && let Some(command) = v.step(&self.shared, &state_of_pose(&p), p.t)
@@ -332,7 +299,7 @@ impl Member {
         )
         .await
         {
-            tracing::error!(vessel = %vessel.id, error = %e, "peer vessel stopped");
+            tracing::error!(vessel = %vessel.id, error = %crate::chain::Chain(&e), "peer vessel stopped");
         }
     }
 }
@@ -426,7 +393,9 @@ impl Declared {
             .map_err(zerr)?;
         let mut missions = member.shared.mission.subscribe();
         let current = missions.borrow_and_update().clone();
-        let guidance = current.as_ref().map(|r| Guidance::new(r.mission.guidance));
+        let guidance = current
+            .as_ref()
+            .map(|r| Guidance::new(r.mission.guidance()));
         tracing::info!(vessel = %id, fleet = %keys.fleet, "peer vessel joined");
         Ok(Declared {
             id: id.to_string(),
@@ -495,7 +464,7 @@ impl Declared {
     fn take_mission(&mut self) {
         self.current = self.missions.borrow_and_update().clone();
         self.guidance = self.current.as_ref().map(|r| {
-            let mut g = Guidance::new(r.mission.guidance);
+            let mut g = Guidance::new(r.mission.guidance());
             g.ahead_only = self.ahead_only;
             g
         });
@@ -535,7 +504,7 @@ impl Declared {
     /// wire carries it; before it has a mission, the paper's default.
     fn actuator(&self) -> (f64, f64) {
         match &self.current {
-            Some(r) => wire::wire_actuator(r.mission.actuator.k, r.mission.actuator.beta),
+            Some(r) => wire::wire_actuator(r.mission.actuator().k, r.mission.actuator().beta),
             None => wire::wire_actuator(
                 crate::coverage::fleet::DEFAULT_K,
                 crate::coverage::fleet::DEFAULT_BETA,
@@ -663,7 +632,7 @@ async fn run_vessel(
                 onboard.advance(period);
                 let t = onboard.t;
                 if t + 1e-9 >= next_control {
-                    let hz = v.current.as_ref().map_or(10.0, |r| r.mission.tick_hz);
+                    let hz = v.current.as_ref().map_or(10.0, |r| r.mission.tick_hz());
                     next_control = t + 1.0 / hz;
                     if let Some(command) = v.step(&shared, &onboard.state, t) {
                         onboard.command = Some((command, t));
@@ -750,5 +719,48 @@ fn hold(
         psi_e: 0.0,
         hold: Some(why.into()),
         station: None,
+    }
+}
+
+/// Until a mission is held, and whenever a neighbour's beacon shows a
+/// newer revision than the one held (one published while this member was
+/// cut off, or a put lost on UDP), asks the fleet for it: at once when such
+/// a beacon arrives, then again every second while behind, but never more
+/// often than every 200 ms.
+async fn ask_while_behind(s: Arc<Shared>, z: zenoh::Session, stop: CancellationToken) {
+    while !stop.is_cancelled() {
+        let held = s.mission.borrow().as_ref().map(|r| r.revision);
+        let newest = s.table.lock().expect("table lock").newest_revision();
+        let behind = match held {
+            None => true,
+            Some(h) => newest.is_some_and(|n| n > h),
+        };
+        // No consolidation: Zenoh's default for a get (`Latest`)
+        // holds every reply back until the last member has
+        // answered, then keeps one per key, without timestamps the
+        // last to arrive, often a neighbour's older revision. Each
+        // answer is taken as it comes; the board keeps the newest.
+        if behind
+            && let Ok(replies) = z
+                .get(s.keys.mission())
+                .consolidation(ConsolidationMode::None)
+                .timeout(Duration::from_secs(1))
+                .await
+        {
+            while let Ok(reply) = replies.recv_async().await {
+                if let Ok(sample) = reply.result() {
+                    s.offer_answer(&sample.payload().to_bytes());
+                }
+            }
+        }
+        let woken = async {
+            tokio::time::sleep(Duration::from_millis(200)).await;
+            s.behind.notified().await;
+        };
+        tokio::select! {
+            _ = stop.cancelled() => break,
+            _ = tokio::time::sleep(Duration::from_secs(1)) => {}
+            _ = woken => {}
+        }
     }
 }

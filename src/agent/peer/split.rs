@@ -204,19 +204,8 @@ impl Split {
         if others.len() < 2 || fresh.is_empty() {
             return Change::None;
         }
-        let vessel = |n: &Neighbour| Vessel {
-            position: Point {
-                x: n.beacon.x,
-                y: n.beacon.y,
-            },
-            k: n.beacon.k,
-            beta: n.beacon.beta,
-        };
         // Own group in id order, this vessel among them.
-        let mut mine: Vec<(String, Vessel)> = fresh
-            .iter()
-            .map(|n| (n.beacon.id.clone(), vessel(n)))
-            .collect();
+        let mut mine: Vec<(String, Vessel)> = fresh.iter().map(|n| as_vessel(n)).collect();
         mine.push((
             me.to_string(),
             Vessel {
@@ -226,10 +215,7 @@ impl Split {
             },
         ));
         mine.sort_by(|a, b| a.0.cmp(&b.0));
-        let theirs: Vec<(String, Vessel)> = others
-            .iter()
-            .map(|n| (n.beacon.id.clone(), vessel(n)))
-            .collect();
+        let theirs: Vec<(String, Vessel)> = others.iter().map(|n| as_vessel(n)).collect();
         if theirs.iter().map(|(id, _)| id).eq(self.refused.iter()) {
             return Change::None;
         }
@@ -244,7 +230,7 @@ impl Split {
             .map(|g| g.iter().map(|(id, _)| id.clone()).collect::<Vec<_>>());
         let groups =
             [first_group, second_group].map(|g| g.iter().map(|(_, v)| *v).collect::<Vec<_>>());
-        let safety = mission.safety.barrier().safety_distance;
+        let safety = mission.safety().barrier().safety_distance;
         // Until the silent group is forgotten, every way keeps clear of
         // where it fell silent as the filter will (the safety distance and
         // the drift allowance, with the slack): they may be wrecks.
@@ -253,8 +239,8 @@ impl Split {
             ..SplitParams::both(safety + 2.0 * SLACK, SPEED)
         };
         let Some(plan) = split::plan(
-            &mission.region,
-            &mission.risk,
+            mission.region(),
+            mission.risk(),
             [&groups[0], &groups[1]],
             &params,
         ) else {
@@ -262,17 +248,7 @@ impl Split {
         };
         let closest = plan.closest();
         let other_ids: Vec<String> = theirs.iter().map(|(id, _)| id.clone()).collect();
-        // A way across an island, or nearer the shore than the filter lets
-        // a hull go, would be left by the hull: no plan either.
-        let barrier = mission.safety.barrier();
-        let shore = mission.layer.shore();
-        let ashore = (0..2).any(|g| {
-            plan.start[g]
-                .iter()
-                .zip(&plan.end[g])
-                .any(|(a, b)| !shore.segment_clear(*a, *b, barrier.shore_distance))
-        });
-        if ashore || !plan.clear {
+        if ashore(&plan, mission) || !plan.clear {
             self.refused.clone_from(&other_ids);
             return Change::Refused {
                 others: other_ids,
@@ -286,7 +262,7 @@ impl Split {
             .expect("this vessel is in its group");
         let speed = plan.speed;
         let lead = if speed > 0.0 {
-            let lag = mission.guidance.lag(speed);
+            let lag = mission.guidance().lag(speed);
             if lag.is_finite() { lag / speed } else { 0.0 }
         } else {
             0.0
@@ -307,6 +283,33 @@ impl Split {
             water,
         }
     }
+}
+
+/// A neighbour as the vessel its last beacon shows, with its id.
+fn as_vessel(n: &Neighbour) -> (String, Vessel) {
+    let vessel = Vessel {
+        position: Point {
+            x: n.beacon.x,
+            y: n.beacon.y,
+        },
+        k: n.beacon.k,
+        beta: n.beacon.beta,
+    };
+    (n.beacon.id.clone(), vessel)
+}
+
+/// Whether a way of `plan` crosses an island or passes nearer the shore
+/// than the filter lets a hull go: the hull would leave it, so the plan is
+/// refused.
+fn ashore(plan: &SplitPlan, mission: &Mission) -> bool {
+    let barrier = mission.safety().barrier();
+    let shore = mission.layer().shore();
+    (0..2).any(|g| {
+        plan.start[g]
+            .iter()
+            .zip(&plan.end[g])
+            .any(|(a, b)| !shore.segment_clear(*a, *b, barrier.shore_distance))
+    })
 }
 
 /// Why an active plan ends on this tick, if it does.

@@ -65,8 +65,8 @@ pub fn relevance(mission: &Mission, actuator: (f64, f64)) -> impl Fn(f64, f64) -
         beta,
     };
     let same = 2.0 * reach(beta);
-    let barrier = mission.safety.barrier();
-    let g = &mission.guidance;
+    let barrier = mission.safety().barrier();
+    let g = &mission.guidance();
     let safety = barrier.safety_distance + barrier.horizon(2.0 * g.max_speed, g.max_yaw_rate);
     move |other_k, other_beta| {
         let cell = if other_k == k && other_beta == beta {
@@ -120,17 +120,17 @@ pub fn step(
         .collect();
     let partition = fresh.len();
     let options = Options::default();
-    let cell = local_cell(&mission.region, &mission.risk, me, fresh, &options)
-        .or_else(|| local_cell(&mission.region, &mission.risk, me, [], &options))
+    let cell = local_cell(mission.region(), mission.risk(), me, fresh, &options)
+        .or_else(|| local_cell(mission.region(), mission.risk(), me, [], &options))
         .expect("a lone vessel of a valid mission is a valid fleet");
     let planned = orders.map_or(&[][..], |o| &o.others[..]);
     let mut states = Vec::with_capacity(neighbours.len() + planned.len() + 1);
     states.push(*own);
     states.extend(neighbours.iter().map(state_of));
     states.extend(planned.iter().map(|(_, s)| *s));
-    let template = Guidance::new(mission.guidance);
+    let template = Guidance::new(mission.guidance());
     let gains = vec![&template; states.len()];
-    let layer = &mission.layer;
+    let layer = &mission.layer();
     let tick_inputs = layer.prepare_with(t, &states, &gains, |i| match i {
         0 => Margin::KNOWN,
         i if i <= neighbours.len() => match &neighbours[i - 1] {

@@ -38,20 +38,10 @@ pub(crate) fn report(result: anyhow::Result<()>) -> ExitCode {
     }
 }
 
-/// An error and its causes, `: `-separated, leaving out a cause whose text
-/// the message before it already quotes (library errors say their source
-/// in their own message, for logs that print only that).
+/// An error and its causes, `: `-separated: each layer's message says
+/// only what failed there (see `seacover::chain`).
 fn error_chain(e: &anyhow::Error) -> String {
-    let mut text = String::new();
-    for cause in e.chain() {
-        let part = cause.to_string();
-        if text.is_empty() {
-            text = part;
-        } else if !text.contains(&part) {
-            text = format!("{text}: {part}");
-        }
-    }
-    text
+    format!("{e:#}")
 }
 
 /// A token that ctrl-c or SIGTERM cancels.
@@ -120,6 +110,66 @@ impl Preset {
             Preset::Otter => VesselParams::OTTER,
         }
     }
+}
+
+// The flags several subcommands share, each declared once (flattened into
+// each subcommand's arguments) with one name and one help.
+
+/// `--bind`.
+#[derive(clap::Args, Debug, Clone)]
+pub(crate) struct Bind {
+    /// Address and port to listen on for the dashboard and the API (a
+    /// coordinator needs --token on any address but loopback).
+    #[arg(
+        id = "bind",
+        long = "bind",
+        value_name = "ADDR:PORT",
+        default_value = "127.0.0.1:8080"
+    )]
+    pub(crate) addr: String,
+}
+
+/// `--token`.
+#[derive(clap::Args, Debug, Clone)]
+pub(crate) struct Token {
+    /// The coordinator's bearer token: a coordinator requires it for
+    /// writes and vessel links, and its clients send it.
+    #[arg(
+        id = "token",
+        long = "token",
+        env = "SEACOVER_TOKEN",
+        hide_env_values = true
+    )]
+    pub(crate) value: Option<String>,
+}
+
+/// `--time-warp`.
+#[derive(clap::Args, Debug, Clone, Copy)]
+pub(crate) struct Warp {
+    /// Run the mission clock this many times faster than real time
+    /// (MOOS-IvP's time warp), in [0.01, 1000]; every program of a
+    /// mission (coordinator, vessels, load client) uses the same.
+    #[arg(
+        id = "time_warp",
+        long = "time-warp",
+        value_name = "W",
+        default_value_t = 1.0
+    )]
+    pub(crate) factor: f64,
+}
+
+/// `--fleet`.
+#[derive(clap::Args, Debug, Clone)]
+pub(crate) struct Fleet {
+    /// The peer fleet's name: the second segment of its Zenoh keys, and
+    /// of its credentials' user name (seacover-NAME).
+    #[arg(
+        id = "fleet",
+        long = "fleet",
+        value_name = "NAME",
+        default_value = "seacover"
+    )]
+    pub(crate) name: String,
 }
 
 /// The Zenoh flags of `agent --peer` and `serve --peer`.

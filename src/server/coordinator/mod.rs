@@ -345,7 +345,7 @@ impl Coordinator {
         shutdown: CancellationToken,
     ) {
         let period =
-            Duration::from_secs_f64(1.0 / (self.mission.tick_hz * self.settings.time_warp));
+            Duration::from_secs_f64(1.0 / (self.mission.tick_hz() * self.settings.time_warp));
         // Tick 1 is due one period after the clock's origin (at once when
         // there is no clock), so what links record on the clock and what
         // ticks record agree.
@@ -433,7 +433,7 @@ impl Coordinator {
 
     /// Mission time of the current tick [s].
     fn time(&self) -> f64 {
-        self.tick as f64 / self.mission.tick_hz
+        self.tick as f64 / self.mission.tick_hz()
     }
 
     /// Serves one request; `true` when it published a snapshot.
@@ -469,7 +469,7 @@ impl Coordinator {
                     (!entry.standing.is_stray()).then_some(name)
                 });
                 let welcomed = welcomed.map(|mission| Welcomed {
-                    tick_hz: self.mission.tick_hz,
+                    tick_hz: self.mission.tick_hz(),
                     mission,
                 });
                 let _ = reply.send(welcomed);
@@ -508,7 +508,7 @@ impl Coordinator {
                                 .into(),
                             );
                         }
-                        let time = self.tick as f64 / self.mission.tick_hz;
+                        let time = self.tick as f64 / self.mission.tick_hz();
                         let live = self.live_ids();
                         let evaluation = self.evaluate_live(&live);
                         self.publish(time, &live, evaluation.as_ref());
@@ -525,7 +525,7 @@ impl Coordinator {
                     self.tick,
                     judging::Bench {
                         limits: &self.settings.limits,
-                        region: &self.mission.region,
+                        region: self.mission.region(),
                         time: self.time(),
                         recorder: &self.recorder,
                     },

@@ -36,7 +36,7 @@ impl Coordinator {
     /// Judges vessel `id`'s hello and makes (or finds) its entry; a link it
     /// had before is told it is replaced. The caller gives it its link.
     pub(super) fn register(&mut self, id: String, hello: Hello) -> Result<&mut Entry, ApiError> {
-        let actuator = hello.actuator.unwrap_or(self.mission.actuator);
+        let actuator = hello.actuator.unwrap_or(self.mission.actuator());
         let agility = agility(hello.agility)?;
         if let Some(r) = hello.station_radius
             && !(r.is_finite() && r > 0.0 && r <= MAX_STATION_RADIUS)
@@ -63,7 +63,7 @@ impl Coordinator {
             )));
         }
         let time = self.time();
-        let gains = self.mission.guidance;
+        let gains = self.mission.guidance();
         let entry = self.vessels.entry(id.clone()).or_insert_with(|| Entry {
             actuator,
             link: None,
@@ -109,7 +109,7 @@ impl Coordinator {
         let (next, answer) = self.mission.changed(change)?;
         if let Some(store) = &self.store {
             store.apply(change, &answer).map_err(|e| {
-                tracing::error!(error = %e, "a mission change could not be stored");
+                tracing::error!(error = %crate::chain::Chain(&e), "a mission change could not be stored");
                 ApiError::Storage(e.to_string())
             })?;
         }

@@ -59,15 +59,20 @@ fn assert_is_the_evaluation(mission: &Mission, states: &[State], eval: &Evaluati
             .iter()
             .map(|s| Vessel {
                 position: Point { x: s.x, y: s.y },
-                k: mission.actuator.k,
-                beta: mission.actuator.beta,
+                k: mission.actuator().k,
+                beta: mission.actuator().beta,
             })
             .collect(),
     )
     .unwrap();
     assert_eq!(
         eval,
-        &evaluate(&mission.region, &mission.risk, &fleet, &Options::default())
+        &evaluate(
+            mission.region(),
+            mission.risk(),
+            &fleet,
+            &Options::default()
+        )
     );
 }
 
@@ -102,7 +107,7 @@ fn tick_commands_are_the_safety_layers() {
         .collect();
     let mut local: Vec<Guidance> = starts
         .iter()
-        .map(|_| Guidance::new(mission.guidance))
+        .map(|_| Guidance::new(mission.guidance()))
         .collect();
     let mut intervened = 0;
     for tick in 0..3 {
@@ -124,7 +129,7 @@ fn tick_commands_are_the_safety_layers() {
         // The pipelined tick's cells and H are the evaluation's.
         assert_is_the_evaluation(&mission, &states, eval);
         let expected = mission
-            .layer
+            .layer()
             .commands(published.time, &states, &eval.cells, &mut local);
         intervened += expected.iter().filter(|s| s.intervened).count();
         for ((_, rx), want) in links.iter_mut().zip(&expected) {
@@ -179,9 +184,9 @@ fn a_large_fleets_parallel_tick_is_the_evaluation_and_the_safety_layer() {
     let published = c.on_tick(1, std::time::Instant::now(), written_tx);
     let eval = published.evaluation.as_ref().unwrap();
     assert_is_the_evaluation(&mission, &states, eval);
-    let mut local: Vec<Guidance> = (0..n).map(|_| Guidance::new(mission.guidance)).collect();
+    let mut local: Vec<Guidance> = (0..n).map(|_| Guidance::new(mission.guidance())).collect();
     let expected = mission
-        .layer
+        .layer()
         .commands(published.time, &states, &eval.cells, &mut local);
     for (i, ((_, rx), want)) in links.iter_mut().zip(&expected).enumerate() {
         let got = command(rx, &format!("vessel {i}"));
@@ -242,7 +247,7 @@ fn the_watch_carries_a_bounded_history_from_the_first_tick() {
         assert_eq!(pair[1].tick - pair[0].tick, 4);
     }
     for s in &history.samples {
-        assert_eq!(s.time, s.tick as f64 / mission.tick_hz);
+        assert_eq!(s.time, s.tick as f64 / mission.tick_hz());
         assert_eq!(s.h, hs[s.tick as usize - 1], "tick {}", s.tick);
     }
     assert!(2500 - history.samples.last().unwrap().tick < 4);

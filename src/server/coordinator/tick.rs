@@ -39,7 +39,7 @@ impl Coordinator {
         let tick = self.tick;
         let bench = judging::Bench {
             limits: &self.settings.limits,
-            region: &self.mission.region,
+            region: self.mission.region(),
             time: self.time(),
             recorder: &self.recorder,
         };
@@ -53,7 +53,7 @@ impl Coordinator {
 
     /// Heard within the liveness window.
     pub(super) fn is_heard(&self, entry: &Entry) -> bool {
-        let window = (self.settings.liveness * self.mission.tick_hz).round() as u64;
+        let window = (self.settings.liveness * self.mission.tick_hz()).round() as u64;
         entry
             .last_seen_tick
             .is_some_and(|t| self.tick - t <= window)
@@ -118,7 +118,7 @@ impl Coordinator {
         self.tick += advance;
         self.collect_poses();
         self.hold_quarantined(due, &written);
-        let time = self.tick as f64 / self.mission.tick_hz;
+        let time = self.tick as f64 / self.mission.tick_hz();
         let live = self.live_ids();
         self.note_liveness(time, &live);
         let Some(fleet) = self.fleet(&live) else {
@@ -154,10 +154,10 @@ impl Coordinator {
             ..Options::default()
         };
         let parallel = entries.len() >= crate::coverage::PARALLEL_MIN;
-        let geometries = cells_with(&mission.region, &fleet, parallel);
+        let geometries = cells_with(mission.region(), &fleet, parallel);
         // Goals inside the vessel's own piece of water, routes round islands
         // and the collision filter: the same functions as `seacover sim`.
-        let layer = &mission.layer;
+        let layer = &mission.layer();
         let safety = {
             let guidance: Vec<&Guidance> = entries.iter().map(|e| &e.guidance).collect();
             layer.prepare(time, &states, &guidance)
@@ -170,8 +170,8 @@ impl Coordinator {
          -> (CellResult, bool) {
             let vessel = &fleet.vessels()[i];
             let cell = cell_figures(
-                &mission.region,
-                &mission.risk,
+                mission.region(),
+                mission.risk(),
                 vessel,
                 geometry,
                 &options,
@@ -284,8 +284,8 @@ impl Coordinator {
     pub(super) fn evaluate_live(&self, live: &[String]) -> Option<Evaluation> {
         let fleet = self.fleet(live)?;
         Some(evaluate(
-            &self.mission.region,
-            &self.mission.risk,
+            self.mission.region(),
+            self.mission.risk(),
             &fleet,
             &Options {
                 parallel: true,
@@ -298,7 +298,7 @@ impl Coordinator {
         let h = evaluation.map_or(0.0, |e| e.h);
         let coverage = match evaluation {
             Some(e) => {
-                let doc = evaluation_document(&self.mission.region, live, e);
+                let doc = evaluation_document(self.mission.region(), live, e);
                 CoverageDocument {
                     tick: self.tick,
                     time,
@@ -335,7 +335,7 @@ impl Coordinator {
                     mass: cell.map_or(0.0, |c| c.mass),
                     centroid: cell.map(|c| c.centroid),
                     last_command: e.last_command.clone(),
-                    last_seen: e.last_seen_tick.map(|t| t as f64 / self.mission.tick_hz),
+                    last_seen: e.last_seen_tick.map(|t| t as f64 / self.mission.tick_hz()),
                     neighbours: e.neighbours,
                     quarantine: e.standing.quarantine(),
                 }

@@ -21,14 +21,8 @@ pub(crate) struct Args {
     /// vessels hold station until a member gives them one.
     #[arg(long, value_name = "FILE", requires = "peer")]
     mission: Option<std::path::PathBuf>,
-    /// With --peer: the fleet's name, the Zenoh keys' second segment.
-    #[arg(
-        long,
-        value_name = "NAME",
-        default_value = "seacover",
-        requires = "peer"
-    )]
-    fleet: String,
+    #[command(flatten)]
+    fleet: shell::Fleet,
     /// With --peer: cover even while hearing no other vessel (single-boat
     /// work). Without it a vessel that hears nobody (the only one left, or
     /// one whose credentials the fleet refuses) holds station and says so.
@@ -53,17 +47,14 @@ pub(crate) struct Args {
     /// Vessel preset: `paper` or `otter`.
     #[arg(long, value_enum, default_value = "paper")]
     preset: Preset,
-    /// Run the vessels' clocks this many times faster than real time: the
-    /// coordinator's --time-warp, in [0.01, 1000].
-    #[arg(long, value_name = "W", default_value_t = 1.0)]
-    time_warp: f64,
+    #[command(flatten)]
+    time_warp: shell::Warp,
     /// Seed of the vessels' disturbances and of the starts of vessels past
     /// the eighth.
     #[arg(long, value_name = "N", default_value_t = 1)]
     seed: u64,
-    /// Bearer token of the coordinator.
-    #[arg(long, env = "SEACOVER_TOKEN", hide_env_values = true)]
-    token: Option<String>,
+    #[command(flatten)]
+    token: shell::Token,
     /// Bridge the autopilots on this MAVLink endpoint instead of
     /// simulating vessels (repeatable): `tcpout:HOST:PORT` (connect, e.g.
     /// to SITL or mavlink-router), `tcpin:ADDR:PORT` (listen),
@@ -135,7 +126,7 @@ fn parse_start(s: &str) -> Result<(f64, f64, f64), String> {
 }
 
 async fn peer(args: Args) -> anyhow::Result<()> {
-    shell::check_warp(args.time_warp)?;
+    shell::check_warp(args.time_warp.factor)?;
     let scenario = match &args.mission {
         Some(path) => Some(std::fs::read_to_string(path)?),
         None => None,
@@ -158,11 +149,11 @@ async fn peer(args: Args) -> anyhow::Result<()> {
         vessels[0].start.y = y;
         vessels[0].start.psi = psi;
     }
-    let mut config = seacover::agent::peer::PeerConfig::new(args.fleet, args.zenoh.options())?;
-    config.time_warp = args.time_warp;
+    let mut config = seacover::agent::peer::PeerConfig::new(args.fleet.name, args.zenoh.options())?;
+    config.time_warp = args.time_warp.factor;
     config.alone = args.alone;
     // Beacons are aged in mission seconds.
-    config.ageing.warp = args.time_warp;
+    config.ageing.warp = args.time_warp.factor;
     if let Some(path) = &args.mission {
         config.mission = Some(seacover::agent::peer::mission_file(path)?);
     }
@@ -190,7 +181,7 @@ async fn bridge(args: Args) -> anyhow::Result<()> {
             return Err(seacover::agent::peer::PeerError::Id(id.clone()).into());
         }
         let mut config =
-            seacover::agent::peer::PeerConfig::new(args.fleet.clone(), args.zenoh.options())?;
+            seacover::agent::peer::PeerConfig::new(args.fleet.name.clone(), args.zenoh.options())?;
         config.alone = args.alone;
         if let Some(path) = &args.mission {
             config.mission = Some(seacover::agent::peer::mission_file(path)?);
@@ -207,7 +198,7 @@ async fn bridge(args: Args) -> anyhow::Result<()> {
         endpoints: args.mavlink,
         arm: args.arm,
         station_radius: (args.station_radius > 0.0).then_some(args.station_radius),
-        token: args.token,
+        token: args.token.value,
         id: args.id,
         sysid: args.mavlink_sysid,
         origin_poll: std::time::Duration::from_secs(2),
@@ -225,7 +216,7 @@ async fn bridge(args: Args) -> anyhow::Result<()> {
 }
 
 async fn simulate(args: Args) -> anyhow::Result<()> {
-    shell::check_warp(args.time_warp)?;
+    shell::check_warp(args.time_warp.factor)?;
     let n = args.vessels.unwrap_or(seacover::agent::DEFAULT_VESSELS);
     let vessels = seacover::agent::fleet(n, args.id, args.preset.params(), args.seed)?;
     let server = args.server.unwrap_or_default();
@@ -234,10 +225,10 @@ async fn simulate(args: Args) -> anyhow::Result<()> {
     })?;
     let config = seacover::agent::AgentConfig {
         url,
-        time_warp: args.time_warp,
+        time_warp: args.time_warp.factor,
         pose_hz: 20.0,
         seed: args.seed,
-        token: args.token,
+        token: args.token.value,
     };
     seacover::agent::run_fleet(config, vessels, shell::stop_on_signal()).await?;
     Ok(())

@@ -27,15 +27,13 @@ pub(crate) struct LoadArgs {
     /// Seconds of settling after every link has its first command.
     #[arg(long, default_value_t = 2.0)]
     warmup: f64,
-    /// The coordinator's --time-warp.
-    #[arg(long, default_value_t = 1.0)]
-    time_warp: f64,
+    #[command(flatten)]
+    time_warp: shell::Warp,
     /// Seed of the start positions.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Bearer token of the coordinator.
-    #[arg(long, env = "SEACOVER_TOKEN", hide_env_values = true)]
-    token: Option<String>,
+    #[command(flatten)]
+    token: shell::Token,
     /// Print the report as JSON instead of a table.
     #[arg(long)]
     json: bool,
@@ -56,9 +54,9 @@ pub(crate) async fn run(Command::Load(args): Command) -> anyhow::Result<()> {
         seconds("duration", args.duration)?,
     );
     config.warmup = seconds("warmup", args.warmup)?;
-    config.time_warp = args.time_warp;
+    config.time_warp = args.time_warp.factor;
     config.seed = args.seed;
-    config.token = args.token;
+    config.token = args.token.value;
     let report = seacover::load::run(config, shell::stop_on_signal()).await?;
     if args.json {
         println!("{}", report.to_json());

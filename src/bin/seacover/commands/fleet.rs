@@ -3,6 +3,8 @@
 
 use std::path::PathBuf;
 
+use crate::shell;
+
 #[derive(clap::Subcommand)]
 pub(crate) enum Command {
     /// Make a fleet's credentials (Zenoh user/password authentication) in
@@ -13,9 +15,8 @@ pub(crate) enum Command {
         /// Where to write them (created; existing credentials are kept).
         #[arg(value_name = "DIR")]
         dir: PathBuf,
-        /// The fleet's name (the user name is seacover-NAME).
-        #[arg(long, value_name = "NAME", default_value = "seacover")]
-        fleet: String,
+        #[command(flatten)]
+        fleet: shell::Fleet,
     },
 }
 
@@ -23,10 +24,10 @@ pub(crate) fn run(command: Command) -> anyhow::Result<()> {
     match command {
         Command::Credentials { dir, fleet } => {
             anyhow::ensure!(
-                seacover::agent::peer::wire::valid_fleet(&fleet),
+                seacover::agent::peer::wire::valid_fleet(&fleet.name),
                 "--fleet must match [A-Za-z0-9_.-]{{1,64}}"
             );
-            let config = seacover::agent::peer::credentials::write(&dir, &fleet)?;
+            let config = seacover::agent::peer::credentials::write(&dir, &fleet.name)?;
             println!("{}", config.display());
             Ok(())
         }

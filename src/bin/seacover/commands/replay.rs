@@ -9,16 +9,15 @@ pub(crate) struct Args {
     /// An MCAP recording (of `serve`, `demo --record` or `sim --record`).
     #[arg(value_name = "FILE")]
     file: PathBuf,
-    /// Address and port of the read-only dashboard and API.
-    #[arg(long, value_name = "ADDR:PORT", default_value = "127.0.0.1:8080")]
-    bind: String,
+    #[command(flatten)]
+    bind: shell::Bind,
     /// Recording seconds per wall-clock second.
     #[arg(long, value_name = "X", default_value_t = 1.0)]
     speed: f64,
 }
 
 pub(crate) async fn run(Args { file, bind, speed }: Args) -> anyhow::Result<()> {
-    let (listener, stop) = shell::listen(&bind).await?;
+    let (listener, stop) = shell::listen(&bind.addr).await?;
     println!(
         "seacover: replaying {} on http://{}",
         file.display(),

@@ -7,17 +7,12 @@ use crate::shell;
 
 #[derive(clap::Args)]
 pub(crate) struct Args {
-    /// Address and port to listen on; any address but loopback needs a
-    /// token.
-    #[arg(long, value_name = "ADDR:PORT", default_value = "127.0.0.1:8080")]
-    bind: String,
-    /// Run the mission clock this many times faster than real time
-    /// (MOOS-IvP's time warp), in [0.01, 1000].
-    #[arg(long, value_name = "W", default_value_t = 1.0)]
-    time_warp: f64,
-    /// Bearer token required for writes and vessel links.
-    #[arg(long, env = "SEACOVER_TOKEN", hide_env_values = true)]
-    token: Option<String>,
+    #[command(flatten)]
+    bind: shell::Bind,
+    #[command(flatten)]
+    time_warp: shell::Warp,
+    #[command(flatten)]
+    token: shell::Token,
     /// Where the mission is stored (created when missing).
     #[arg(long, value_name = "DIR", default_value = "seacover-data")]
     data_dir: PathBuf,
@@ -56,14 +51,8 @@ pub(crate) struct Args {
     /// from their beacons; no commands are sent.
     #[arg(long)]
     peer: bool,
-    /// With --peer: the fleet's name.
-    #[arg(
-        long,
-        value_name = "NAME",
-        default_value = "seacover",
-        requires = "peer"
-    )]
-    fleet: String,
+    #[command(flatten)]
+    fleet: shell::Fleet,
     /// With --peer: `peer`, or `router` to route for members that reach
     /// this one over a routed network (LTE, VPN).
     #[arg(long, value_enum, default_value = "peer", requires = "peer")]
@@ -107,7 +96,7 @@ pub(crate) async fn run(args: Args) -> anyhow::Result<()> {
         },
         wall_clock: true,
     });
-    shell::check_warp(args.time_warp)?;
+    shell::check_warp(args.time_warp.factor)?;
     let settings = match &args.config {
         Some(path) => seacover::server::config::Settings::load(path)?,
         None => Default::default(),
@@ -116,11 +105,11 @@ pub(crate) async fn run(args: Args) -> anyhow::Result<()> {
         Some(path) => format!("from {}", path.display()),
         None => "the built-in paper scenario (no --config)".to_string(),
     };
-    let (listener, stop) = shell::listen(&args.bind).await?;
+    let (listener, stop) = shell::listen(&args.bind.addr).await?;
     let config = seacover::server::ServeConfig {
         mission: settings.mission,
-        time_warp: args.time_warp,
-        token: args.token,
+        time_warp: args.time_warp.factor,
+        token: args.token.value,
         liveness: settings.liveness,
         data_dir: Some(args.data_dir),
         write_rate: settings.write_rate,
@@ -133,7 +122,7 @@ pub(crate) async fn run(args: Args) -> anyhow::Result<()> {
                 zenoh.mode = seacover::agent::peer::session::Mode::Router;
             }
             seacover::server::peer::PeerMember {
-                fleet: args.fleet.clone(),
+                fleet: args.fleet.name.clone(),
                 zenoh,
                 replace: args.replace_fleet_mission,
             }
