@@ -254,13 +254,7 @@ fn respond(status: StatusCode, result: ChangeResult) -> Response {
     request_body = OriginDocument,
     responses(
         (status = 200, description = "The mission with the new origin, once durable.", body = MissionDocument),
-        (status = 400, response = super::responses::Malformed),
-        (status = 401, response = super::responses::Unauthorized),
-        (status = 413, response = super::responses::TooLarge),
-        (status = 422, response = super::responses::Invalid),
-        (status = 429, response = super::responses::RateLimited),
-        (status = 500, response = super::responses::NotStored),
-        (status = 503, response = super::responses::ShuttingDown),
+        super::responses::DocumentWrite,
     ),
     security(("bearer" = [])),
 )]
@@ -286,13 +280,7 @@ pub(super) async fn put_origin(
     request_body = RegionInput,
     responses(
         (status = 200, description = "The mission with the new region, once durable.", body = MissionDocument),
-        (status = 400, response = super::responses::Malformed),
-        (status = 401, response = super::responses::Unauthorized),
-        (status = 413, response = super::responses::TooLarge),
-        (status = 422, response = super::responses::Invalid),
-        (status = 429, response = super::responses::RateLimited),
-        (status = 500, response = super::responses::NotStored),
-        (status = 503, response = super::responses::ShuttingDown),
+        super::responses::DocumentWrite,
     ),
     security(("bearer" = [])),
 )]
@@ -315,13 +303,7 @@ pub(super) async fn put_region(
     request_body = crate::protocol::RiskBaseDocument,
     responses(
         (status = 200, description = "The mission with the new base density, once durable.", body = MissionDocument),
-        (status = 400, response = super::responses::Malformed),
-        (status = 401, response = super::responses::Unauthorized),
-        (status = 413, response = super::responses::TooLarge),
-        (status = 422, response = super::responses::Invalid),
-        (status = 429, response = super::responses::RateLimited),
-        (status = 500, response = super::responses::NotStored),
-        (status = 503, response = super::responses::ShuttingDown),
+        super::responses::DocumentWrite,
     ),
     security(("bearer" = [])),
 )]
@@ -347,14 +329,8 @@ pub(super) async fn put_base(
     request_body = RiskObjectInput,
     responses(
         (status = 201, description = "The stored object with its id, once durable.", body = RiskObjectDocument),
-        (status = 400, response = super::responses::Malformed),
-        (status = 401, response = super::responses::Unauthorized),
         (status = 409, response = super::responses::Conflict),
-        (status = 413, response = super::responses::TooLarge),
-        (status = 422, response = super::responses::Invalid),
-        (status = 429, response = super::responses::RateLimited),
-        (status = 500, response = super::responses::NotStored),
-        (status = 503, response = super::responses::ShuttingDown),
+        super::responses::DocumentWrite,
     ),
     security(("bearer" = [])),
 )]
@@ -407,14 +383,8 @@ pub(super) async fn get_object(
     request_body = RiskObjectInput,
     responses(
         (status = 200, description = "The stored object, once durable.", body = RiskObjectDocument),
-        (status = 400, response = super::responses::Malformed),
-        (status = 401, response = super::responses::Unauthorized),
         (status = 404, response = super::responses::NotFound),
-        (status = 413, response = super::responses::TooLarge),
-        (status = 422, response = super::responses::Invalid),
-        (status = 429, response = super::responses::RateLimited),
-        (status = 500, response = super::responses::NotStored),
-        (status = 503, response = super::responses::ShuttingDown),
+        super::responses::DocumentWrite,
     ),
     security(("bearer" = [])),
 )]

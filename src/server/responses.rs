@@ -46,3 +46,30 @@ error_responses! {
     NotStored => "`storage`: the change could not be made durable and was not applied.",
     ShuttingDown => "`shutting_down`: the coordinator is stopping.",
 }
+
+/// The answers a write of the mission's documents may get besides its
+/// success, declared once for every such handler's `responses(...)` (each
+/// a reference to the component above).
+pub(super) struct DocumentWrite;
+
+impl utoipa::IntoResponses for DocumentWrite {
+    fn responses() -> std::collections::BTreeMap<String, RefOr<Response>> {
+        [
+            ("400", "Malformed"),
+            ("401", "Unauthorized"),
+            ("413", "TooLarge"),
+            ("422", "Invalid"),
+            ("429", "RateLimited"),
+            ("500", "NotStored"),
+            ("503", "ShuttingDown"),
+        ]
+        .into_iter()
+        .map(|(status, name)| {
+            (
+                status.to_string(),
+                RefOr::Ref(Ref::from_response_name(name)),
+            )
+        })
+        .collect()
+    }
+}
