@@ -5,9 +5,10 @@ use axum::Json;
 use axum::http::StatusCode;
 use axum::response::{IntoResponse, Response};
 
+use crate::coverage::InputError;
 use crate::mission::MissionError;
 use crate::mission::scenario::ScenarioError;
-use crate::protocol::{ErrorDetail, ErrorDocument};
+use crate::protocol::{ErrorCode, ErrorDetail, ErrorDocument};
 
 /// Largest request body accepted; a larger one is answered `too_large`.
 pub const MAX_BODY: usize = 1024 * 1024;
@@ -16,7 +17,7 @@ pub const MAX_BODY: usize = 1024 * 1024;
 /// its extensions for the rejection events
 /// ([`record_rejections`](super::events::record_rejections)).
 #[derive(Debug, Clone, Copy)]
-pub(super) struct ErrorCode(pub &'static str);
+pub(super) struct AnsweredCode(pub ErrorCode);
 
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ApiError {
@@ -48,19 +49,19 @@ pub enum ApiError {
 }
 
 impl ApiError {
-    pub fn code(&self) -> &'static str {
+    pub fn code(&self) -> ErrorCode {
         match self {
-            ApiError::Malformed(_) => "malformed",
-            ApiError::NotFound(_) => "not_found",
-            ApiError::Invalid(_) => "invalid",
-            ApiError::Unsupported(_) => "unsupported",
-            ApiError::Conflict(_) => "conflict",
-            ApiError::MethodNotAllowed(_) => "method_not_allowed",
-            ApiError::Unauthorized => "unauthorized",
-            ApiError::ShuttingDown => "shutting_down",
-            ApiError::TooLarge(_) => "too_large",
-            ApiError::RateLimited(_) => "rate_limited",
-            ApiError::Storage(_) => "storage",
+            ApiError::Malformed(_) => ErrorCode::Malformed,
+            ApiError::NotFound(_) => ErrorCode::NotFound,
+            ApiError::Invalid(_) => ErrorCode::Invalid,
+            ApiError::Unsupported(_) => ErrorCode::Unsupported,
+            ApiError::Conflict(_) => ErrorCode::Conflict,
+            ApiError::MethodNotAllowed(_) => ErrorCode::MethodNotAllowed,
+            ApiError::Unauthorized => ErrorCode::Unauthorized,
+            ApiError::ShuttingDown => ErrorCode::ShuttingDown,
+            ApiError::TooLarge(_) => ErrorCode::TooLarge,
+            ApiError::RateLimited(_) => ErrorCode::RateLimited,
+            ApiError::Storage(_) => ErrorCode::Storage,
         }
     }
 
@@ -82,7 +83,7 @@ impl ApiError {
     pub fn document(&self) -> ErrorDocument {
         ErrorDocument {
             error: ErrorDetail {
-                code: self.code().to_string(),
+                code: self.code().as_str().to_string(),
                 message: self.to_string(),
             },
         }
@@ -91,10 +92,11 @@ impl ApiError {
 
 impl From<ScenarioError> for ApiError {
     fn from(e: ScenarioError) -> Self {
-        match e.code() {
-            "malformed" => ApiError::Malformed(e.to_string()),
-            "unsupported" => ApiError::Unsupported(e.to_string()),
-            _ => ApiError::Invalid(e.to_string()),
+        let message = e.to_string();
+        match e {
+            ScenarioError::Malformed(_) => ApiError::Malformed(message),
+            ScenarioError::Input(InputError::Unsupported { .. }) => ApiError::Unsupported(message),
+            ScenarioError::Input(_) => ApiError::Invalid(message),
         }
     }
 }
@@ -113,7 +115,7 @@ impl From<MissionError> for ApiError {
 impl IntoResponse for ApiError {
     fn into_response(self) -> Response {
         let mut response = (self.status(), Json(self.document())).into_response();
-        response.extensions_mut().insert(ErrorCode(self.code()));
+        response.extensions_mut().insert(AnsweredCode(self.code()));
         if let ApiError::Unauthorized = self {
             // RFC 6750: the scheme a client must use.
             response.headers_mut().insert(

@@ -10,7 +10,7 @@ use axum::middleware::Next;
 use axum::response::Response;
 
 use super::AppState;
-use super::error::ErrorCode;
+use super::error::AnsweredCode;
 use crate::recorder::messages::{EventKind, EventRecord};
 
 /// The remote address of a request, when the server knows it (it is served
@@ -54,7 +54,7 @@ pub(super) async fn record_rejections(
     if status.is_client_error() || status.is_server_error() {
         let code = response
             .extensions()
-            .get::<ErrorCode>()
+            .get::<AnsweredCode>()
             .map_or_else(|| status.as_u16().to_string(), |c| c.0.to_string());
         if link {
             tracing::warn!(

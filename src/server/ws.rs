@@ -318,7 +318,15 @@ async fn join(
     let welcomed = match (registered, reply_rx.await) {
         (true, Ok(Ok(welcomed))) => welcomed,
         (_, Ok(Err(e))) => {
-            refuse_hello(socket, app, peer, Some(&id), e.code(), e.to_string()).await;
+            refuse_hello(
+                socket,
+                app,
+                peer,
+                Some(&id),
+                e.code().as_str(),
+                e.to_string(),
+            )
+            .await;
             return None;
         }
         _ => {

@@ -4,6 +4,7 @@
 //! `{"error": {"code", "message"}}`.
 
 use super::scenario::ScenarioError;
+use seacover_protocol::ErrorCode;
 
 /// Why a mission, or a change to it, was rejected.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -25,12 +26,12 @@ pub enum MissionError {
 
 impl MissionError {
     /// Stable machine-readable code.
-    pub fn code(&self) -> &'static str {
+    pub fn code(&self) -> ErrorCode {
         match self {
             MissionError::Scenario(e) => e.code(),
-            MissionError::Invalid(_) => "invalid",
-            MissionError::NotFound(_) => "not_found",
-            MissionError::Conflict(_) => "conflict",
+            MissionError::Invalid(_) => ErrorCode::Invalid,
+            MissionError::NotFound(_) => ErrorCode::NotFound,
+            MissionError::Conflict(_) => ErrorCode::Conflict,
         }
     }
 }

@@ -16,8 +16,8 @@ use seacover_engine::coverage::{
 use seacover_engine::geometry::arcs::Piece;
 use seacover_engine::geometry::{Point, Region};
 use seacover_protocol::{
-    CellDocument, EdgeDocument, ErrorDetail, ErrorDocument, EvaluationDocument, OriginDocument,
-    RegionDocument, RiskDocument, ScenarioDocument, VesselDocument, XY,
+    CellDocument, EdgeDocument, ErrorCode, ErrorDetail, ErrorDocument, EvaluationDocument,
+    OriginDocument, RegionDocument, RiskDocument, ScenarioDocument, VesselDocument, XY,
 };
 
 /// Why a scenario was rejected.
@@ -33,11 +33,11 @@ pub enum ScenarioError {
 
 impl ScenarioError {
     /// Stable machine-readable code.
-    pub fn code(&self) -> &'static str {
+    pub fn code(&self) -> ErrorCode {
         match self {
-            ScenarioError::Malformed(_) => "malformed",
-            ScenarioError::Input(InputError::Unsupported { .. }) => "unsupported",
-            ScenarioError::Input(_) => "invalid",
+            ScenarioError::Malformed(_) => ErrorCode::Malformed,
+            ScenarioError::Input(InputError::Unsupported { .. }) => ErrorCode::Unsupported,
+            ScenarioError::Input(_) => ErrorCode::Invalid,
         }
     }
 
@@ -45,7 +45,7 @@ impl ScenarioError {
     pub fn to_document(&self) -> ErrorDocument {
         ErrorDocument {
             error: ErrorDetail {
-                code: self.code().to_string(),
+                code: self.code().as_str().to_string(),
                 message: self.to_string(),
             },
         }

@@ -12,6 +12,7 @@
 //! `mission::scenario` and answered with `invalid`.
 
 mod cell;
+mod error_code;
 mod fault;
 mod json_error;
 mod link;
@@ -19,6 +20,7 @@ pub mod peer;
 mod schema;
 
 pub use cell::{CellDocument, EdgeDocument, EvaluationDocument};
+pub use error_code::ErrorCode;
 pub use fault::{FixDocument, QuarantineDocument};
 pub use json_error::json_error;
 pub use link::{AgilityDocument, CommandDocument, CoordinatorMessage, PoseDocument, VesselMessage};

@@ -60,7 +60,7 @@ pub(crate) fn run(Args { file, tolerance }: Args) -> ExitCode {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => fail("io", format!("cannot write standard output: {e}")),
         },
-        Err(e) => fail(e.code(), e.to_string()),
+        Err(e) => fail(e.code().as_str(), e.to_string()),
     }
 }
 
