@@ -230,7 +230,7 @@ async fn change(app: &AppState, change: MissionChange) -> Result<ChangeResult, A
         .send(Request::Change { change, reply })
         .await
         .map_err(|_| ApiError::ShuttingDown)?;
-    answer.await.map_err(|_| ApiError::ShuttingDown)?
+    Ok(answer.await.map_err(|_| ApiError::ShuttingDown)??)
 }
 
 fn respond(status: StatusCode, result: ChangeResult) -> Response {

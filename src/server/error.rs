@@ -5,6 +5,7 @@ use axum::Json;
 use axum::http::StatusCode;
 use axum::response::{IntoResponse, Response};
 
+use super::coordinator::CoordinatorError;
 use crate::coverage::InputError;
 use crate::mission::MissionError;
 use crate::mission::scenario::ScenarioError;
@@ -108,6 +109,20 @@ impl From<MissionError> for ApiError {
             MissionError::Invalid(m) => ApiError::Invalid(m),
             MissionError::NotFound(m) => ApiError::NotFound(m),
             MissionError::Conflict(m) => ApiError::Conflict(m),
+        }
+    }
+}
+
+impl From<CoordinatorError> for ApiError {
+    fn from(e: CoordinatorError) -> Self {
+        let message = e.to_string();
+        match e {
+            CoordinatorError::Mission(e) => ApiError::from(e),
+            CoordinatorError::Hello(_) => ApiError::Invalid(message),
+            CoordinatorError::Full(_) | CoordinatorError::ReadOnly => ApiError::Conflict(message),
+            CoordinatorError::NoVessel(_) => ApiError::NotFound(message),
+            // The store's own words: the client learns why.
+            CoordinatorError::Storage(e) => ApiError::Storage(crate::chain::Chain(&e).to_string()),
         }
     }
 }

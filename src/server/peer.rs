@@ -102,7 +102,7 @@ async fn adopt(app: &AppState, doc: &PeerMissionDocument) -> Result<(), PeerErro
             );
             Ok(())
         }
-        Ok(Err(e)) => Err(failed(e.to_string())),
+        Ok(Err(e)) => Err(failed(crate::chain::Chain(&e).to_string())),
         Err(_) => Err(failed("the coordinator is stopping".into())),
     }
 }
@@ -587,7 +587,7 @@ async fn register(
             Some(Heard { link, poses })
         }
         Ok(Err(e)) => {
-            tracing::warn!(vessel = id, error = %e, "peer vessel not shown");
+            tracing::warn!(vessel = id, error = %crate::chain::Chain(&e), "peer vessel not shown");
             None
         }
         Err(_) => None,

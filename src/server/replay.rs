@@ -39,7 +39,7 @@ use tokio_util::sync::CancellationToken;
 use tokio_util::task::TaskTracker;
 
 use super::coordinator::history::History;
-use super::coordinator::{Request, Snapshot as Published};
+use super::coordinator::{CoordinatorError, Request, Snapshot as Published};
 use super::error::ApiError;
 use super::web::PageMode;
 use super::{AppState, ServeError, router};
@@ -320,13 +320,7 @@ pub async fn serve(
 
 /// What would change the mission or the fleet: 409.
 async fn refuse_writes(mut requests: mpsc::Receiver<Request>, shutdown: CancellationToken) {
-    let refusal = || {
-        ApiError::Conflict(
-            "this server is a replay of a recording: it is read-only (writes and vessel links \
-             go to a coordinator, `seacover serve`)"
-                .into(),
-        )
-    };
+    let refusal = || CoordinatorError::ReadOnly;
     loop {
         let request = tokio::select! {
             _ = shutdown.cancelled() => return,

@@ -21,6 +21,7 @@
 //!   written (or half a period later at most), never while the links are
 //!   writing them.
 
+mod error;
 pub(super) mod history;
 mod judging;
 mod requests;
@@ -55,6 +56,7 @@ use crate::protocol::{
 };
 use crate::recorder::messages::{EventKind, EventRecord};
 use crate::recorder::{Entry as RecorderEntry, Recorder};
+pub(super) use error::CoordinatorError;
 
 /// What links and handlers ask of the tick task.
 #[derive(Debug)]
@@ -79,7 +81,7 @@ pub enum Request {
         /// the tick only ever wants the newest, and 1000 vessels at 20 Hz
         /// would otherwise wake this task 20,000 times a second.
         poses: watch::Receiver<Option<PoseDocument>>,
-        reply: oneshot::Sender<Result<Welcomed, ApiError>>,
+        reply: oneshot::Sender<Result<Welcomed, CoordinatorError>>,
     },
     /// A link closed.
     Gone { id: String, link: u64 },
@@ -87,7 +89,7 @@ pub enum Request {
     /// told `removed` and closed.
     Forget {
         id: String,
-        reply: oneshot::Sender<Result<(), ApiError>>,
+        reply: oneshot::Sender<Result<(), CoordinatorError>>,
     },
     /// A peer fleet's vessels' own neighbour counts (`serve --peer`).
     PeerNeighbours(BTreeMap<String, u32>),
@@ -95,7 +97,7 @@ pub enum Request {
     /// document's new state.
     Change {
         change: MissionChange,
-        reply: oneshot::Sender<Result<ChangeResult, ApiError>>,
+        reply: oneshot::Sender<Result<ChangeResult, CoordinatorError>>,
     },
 }
 
@@ -514,7 +516,7 @@ impl Coordinator {
                         self.publish(time, &live, evaluation.as_ref());
                         Ok(())
                     }
-                    None => Err(ApiError::NotFound(format!("no vessel {id:?}"))),
+                    None => Err(CoordinatorError::NoVessel(id.clone())),
                 };
                 let forgotten = outcome.is_ok();
                 let _ = reply.send(outcome);

@@ -6,7 +6,7 @@
 //! coordinator whose mission is only its start-up default re-tasks no
 //! vessel that names another mission, until an operator changes it.
 
-use super::{ApiError, Coordinator, Entry, Hello, Outgoing, judging, mission_name};
+use super::{Coordinator, CoordinatorError, Entry, Hello, Outgoing, judging, mission_name};
 use crate::control::guidance::{Agility, Guidance};
 use crate::mission::{ChangeResult, MissionChange};
 use crate::protocol::{AgilityDocument, CoordinatorMessage};
@@ -16,13 +16,13 @@ use crate::protocol::{AgilityDocument, CoordinatorMessage};
 /// steers it through.
 const MAX_STATION_RADIUS: f64 = 20.0;
 
-fn agility(declared: Option<AgilityDocument>) -> Result<Agility, ApiError> {
+fn agility(declared: Option<AgilityDocument>) -> Result<Agility, CoordinatorError> {
     let Some(a) = declared else {
         return Ok(Agility::UNDECLARED);
     };
     let ok = |x: f64| x.is_finite() && x > 0.0;
     if !(ok(a.yaw_accel) && ok(a.surge_accel)) {
-        return Err(ApiError::Invalid(
+        return Err(CoordinatorError::Hello(
             "agility: yaw_accel and surge_accel must be finite numbers > 0".into(),
         ));
     }
@@ -35,13 +35,17 @@ fn agility(declared: Option<AgilityDocument>) -> Result<Agility, ApiError> {
 impl Coordinator {
     /// Judges vessel `id`'s hello and makes (or finds) its entry; a link it
     /// had before is told it is replaced. The caller gives it its link.
-    pub(super) fn register(&mut self, id: String, hello: Hello) -> Result<&mut Entry, ApiError> {
+    pub(super) fn register(
+        &mut self,
+        id: String,
+        hello: Hello,
+    ) -> Result<&mut Entry, CoordinatorError> {
         let actuator = hello.actuator.unwrap_or(self.mission.actuator());
         let agility = agility(hello.agility)?;
         if let Some(r) = hello.station_radius
             && !(r.is_finite() && r > 0.0 && r <= MAX_STATION_RADIUS)
         {
-            return Err(ApiError::Invalid(format!(
+            return Err(CoordinatorError::Hello(format!(
                 "station_radius: must be a finite number in (0, {MAX_STATION_RADIUS}] m, got {r}"
             )));
         }
@@ -53,14 +57,12 @@ impl Coordinator {
             .into_iter()
             .find(|&(_, x, max)| !(x.is_finite() && x > 0.0 && x <= max));
         if let Some((field, value, max)) = out_of_range {
-            return Err(ApiError::Invalid(format!(
+            return Err(CoordinatorError::Hello(format!(
                 "actuator.{field}: must be a finite number in (0, {max:e}], got {value}"
             )));
         }
         if !self.vessels.contains_key(&id) && self.vessels.len() >= MAX_VESSELS {
-            return Err(ApiError::Conflict(format!(
-                "the mission already has {MAX_VESSELS} vessels, the most it takes"
-            )));
+            return Err(CoordinatorError::Full(MAX_VESSELS));
         }
         let time = self.time();
         let gains = self.mission.guidance();
@@ -105,12 +107,15 @@ impl Coordinator {
     /// at once. The commit blocks this task for one fsync (a few ms);
     /// writes are rate-limited, so the tick loses at most that, and
     /// changes stay in one order.
-    pub(super) fn change(&mut self, change: &MissionChange) -> Result<ChangeResult, ApiError> {
+    pub(super) fn change(
+        &mut self,
+        change: &MissionChange,
+    ) -> Result<ChangeResult, CoordinatorError> {
         let (next, answer) = self.mission.changed(change)?;
         if let Some(store) = &self.store {
             store.apply(change, &answer).map_err(|e| {
                 tracing::error!(error = %crate::chain::Chain(&e), "a mission change could not be stored");
-                ApiError::Storage(e.to_string())
+                CoordinatorError::Storage(e)
             })?;
         }
         self.mission = next;
