@@ -268,7 +268,7 @@ fn d_lossy_narrow_links() {
 /// e. A range-limited radio, as MOOS-IvP's uFldNodeComms: the packets
 /// between two vessels farther apart than R are dropped (`cut_pairs`), from
 /// the positions the observer hears, re-evaluated at 2 Hz of mission time
-/// (the rules are rewritten when the set of cut pairs changes), from the
+/// (the medium's lists change when the set of cut pairs does), from the
 /// starts on. One fleet per R from the paper's starts, 150 s of mission
 /// time each. The paper's region is a 100 m square: no two vessels are
 /// ever more than its diagonal, 141.4 m, apart, so R = 200 cuts nothing and
@@ -310,17 +310,20 @@ fn e_range_limited_radio() {
         fleet.launch();
         fleet.wait_heard_all();
         fleet.wait_formed(30.0);
+        let safety = fleet.safety_distance();
         let mut cut = out_of_range(&fleet.positions());
         fleet
             .medium
             .cut_pairs(&cut.iter().copied().collect::<Vec<_>>());
         let (mut ever, mut most, mut updates) = (cut.clone(), cut.len(), 0usize);
         let mut last = Instant::now();
+        let mut slowest = Duration::ZERO;
         let period = Duration::from_secs_f64(0.5 / WARP);
         fleet.run_until(run, |f| {
             if last.elapsed() < period {
                 return;
             }
+            slowest = slowest.max(last.elapsed());
             last = Instant::now();
             let now_cut = out_of_range(&f.positions());
             if now_cut != cut {
@@ -332,23 +335,28 @@ fn e_range_limited_radio() {
                 cut = now_cut;
             }
         });
+        // Stopped before anything is read: the range model stops with the
+        // run, and vessels left running would go on moving through a
+        // medium frozen as the run left it, deaf to pairs that have since
+        // come into range.
+        fleet.shutdown(&mut checks);
         let (h, e) = coverage(&fleet.positions());
         let least_neighbours = fleet
             .statuses
             .iter()
             .filter_map(|s| s["status"]["neighbours"].as_u64())
             .min();
-        let safety = fleet.safety_distance();
         let closest = check_safety(&mut checks, &fleet, safety);
         check_wire(&mut checks, &fleet);
-        fleet.shutdown(&mut checks);
         eprintln!(
             "{test}: R = {range} m: H {h:.1} / centralized {h_central:.1} = {:.5}, E_max {:.2} m, \
-             pairs cut at most {most} (ever {}, {updates} updates), least partition in a status \
-             {least_neighbours:?}, closest pair {closest:.2} m",
+             pairs cut at most {most} (ever {}, {updates} updates; the range model's longest \
+             interval {:.0} ms of wall time), least partition in a status {least_neighbours:?}, \
+             closest pair {closest:.2} m",
             h / h_central,
             max_of(&e),
             ever.len(),
+            slowest.as_secs_f64() * 1e3,
         );
         rows.push((range, h / h_central, max_of(&e), most, ever.len(), closest));
         if range >= 200.0 {

@@ -13,12 +13,22 @@
 //!   multicast is always flooded), and `v0 … v<n-1>`, the medium's ends of
 //!   the veth pairs, enslaved to `br0`. `net.bridge.bridge-nf-call-iptables`
 //!   is set to 1 here, so that bridged frames traverse this namespace's
-//!   iptables FORWARD chain, where `-m physdev --physdev-in vA --physdev-out
-//!   vB` tells the hosts apart (for flooded multicast too: the hook runs once
-//!   per output port). FORWARD jumps to three chains of ours, rebuilt
-//!   whole, one `iptables-restore --noflush` batch each time: `SC_PART`
+//!   iptables FORWARD chain, where `-m physdev --physdev-out vB` tells the
+//!   hosts apart (for flooded multicast too: the hook runs once per output
+//!   port). FORWARD jumps to three chains of ours: `SC_PART`
 //!   ([`Medium::partition`]), `SC_CUT` ([`Medium::cut_pairs`]), `SC_LOSS`
 //!   ([`Medium::loss`]).
+//! - Partitions and cuts change while the vessels move, so they never go
+//!   through a netfilter commit: under load (eight vessels at a time warp
+//!   on two busy cores) one `iptables-restore` took up to 28 s here,
+//!   waiting in the kernel, and a range-limited radio that lags the boats
+//!   by seconds lets two of them close in silence. Their chains are fixed
+//!   when the medium is made: one rule per port `vB`, dropping what leaves
+//!   it from a source in the `xt_recent` list `sc_part_vB` or `sc_cut_vB`.
+//!   A change adds or removes addresses in those lists by writing to
+//!   `/proc/<pid>/net/xt_recent/…` of a `sleep` the medium keeps in its
+//!   namespace: a write under the same load took at most 7 ms. `SC_LOSS`
+//!   is rebuilt whole, one `iptables-restore --noflush` batch each time.
 //! - `scnet-<pid>-<k>-h<i>`: `lo` up, `eth0` (the host's end of its veth)
 //!   with 10.77.<k mod 250>.<i+1>/24, and a route for 224.0.0.0/4 on `eth0`:
 //!   without any route for multicast, a plain socket's send to Zenoh's
@@ -41,8 +51,8 @@
 //!   no data and are left alone).
 //! - A condition of one kind replaces the previous one of its kind; kinds
 //!   combine (a partition and a loss rate at the same time).
-//! - Processes are only started by the caller ([`Medium::command`]); the
-//!   medium kills nothing. A namespace deleted while a process is still in
+//! - Processes are only started by the caller ([`Medium::command`]),
+//!   except the medium's own `sleep`, which it kills on [`Drop`]. A namespace deleted while a process is still in
 //!   it lives on until that process exits.
 //! - Every command's exit status is checked: a failure panics naming the
 //!   command and its stderr. Everything is synchronous.
@@ -50,9 +60,11 @@
 //! Callers check [`root_or_skip`] first: without root the tests are skipped
 //! with a message, except under CI=true, where that is a failure.
 
+use std::collections::BTreeSet;
 use std::io::Write;
 use std::path::Path;
-use std::process::{Command, Stdio};
+use std::process::{Child, Command, Stdio};
+use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 /// The prefix of every namespace made here.
@@ -199,7 +211,32 @@ pub(crate) struct Medium {
     subnet: usize,
     /// Whether [`Medium::limit`] has put qdiscs in place.
     limited: AtomicBool,
+    /// A process in the medium's namespace, for its `/proc/<pid>/net`.
+    holder: Option<Child>,
+    /// The pairs (a < b) in the partition's and the cut's lists now.
+    parted: Mutex<BTreeSet<(usize, usize)>>,
+    cut: Mutex<BTreeSet<(usize, usize)>>,
 }
+
+/// Which of the two kinds of pair lists ([`Medium::set_pairs`]).
+#[derive(Clone, Copy)]
+enum Pairs {
+    Partition,
+    Cut,
+}
+
+impl Pairs {
+    fn list(self, port: usize) -> String {
+        match self {
+            Pairs::Partition => format!("sc_part_v{port}"),
+            Pairs::Cut => format!("sc_cut_v{port}"),
+        }
+    }
+}
+
+/// How many addresses an `xt_recent` list holds (the module's default
+/// `ip_list_tot`); a fuller list would forget its oldest entry.
+const LIST_SIZE: usize = 100;
 
 impl Medium {
     /// A medium with `hosts` hosts (1 to 250), all linked and up.
@@ -212,13 +249,25 @@ impl Medium {
         let prefix = format!("{PREFIX}{}-{k}", std::process::id());
         // Made before any namespace exists, so that a failure half-way
         // through still deletes what was made (Drop skips the missing ones).
-        let medium = Medium {
+        let mut medium = Medium {
             medium: format!("{prefix}-m"),
             hosts: (0..hosts).map(|i| format!("{prefix}-h{i}")).collect(),
             subnet: k % 250,
             limited: AtomicBool::new(false),
+            holder: None,
+            parted: Mutex::new(BTreeSet::new()),
+            cut: Mutex::new(BTreeSet::new()),
         };
         medium.make_medium();
+        medium.holder = Some(
+            Command::new("ip")
+                .args(["netns", "exec", &medium.medium, "sleep", "infinity"])
+                .stdin(Stdio::null())
+                .spawn()
+                .unwrap_or_else(|e| {
+                    panic!("`ip netns exec … sleep infinity` could not start: {e}")
+                }),
+        );
         for i in 0..hosts {
             medium.make_host(i);
         }
@@ -263,10 +312,20 @@ impl Medium {
             None,
         );
         run("ip", &["-n", m, "link", "set", "br0", "up"], None);
-        let hooks = format!(
+        let mut hooks = format!(
             "*filter\n:{PARTITION} - [0:0]\n:{CUT} - [0:0]\n:{LOSS} - [0:0]\n\
-             -A FORWARD -j {PARTITION}\n-A FORWARD -j {CUT}\n-A FORWARD -j {LOSS}\nCOMMIT\n"
+             -A FORWARD -j {PARTITION}\n-A FORWARD -j {CUT}\n-A FORWARD -j {LOSS}\n"
         );
+        for port in 0..self.hosts.len() {
+            for (chain, kind) in [(PARTITION, Pairs::Partition), (CUT, Pairs::Cut)] {
+                hooks.push_str(&format!(
+                    "-A {chain} -m physdev --physdev-out v{port} -m recent --name {} --rsource \
+                     --rcheck -j DROP\n",
+                    kind.list(port)
+                ));
+            }
+        }
+        hooks.push_str("COMMIT\n");
         run_in(m, "iptables-restore", &["-w", "--noflush"], Some(&hooks));
     }
 
@@ -344,50 +403,85 @@ impl Medium {
         );
     }
 
-    /// The rules dropping every packet between hosts `a` and `b`, both ways.
-    fn drop_between(&self, a: usize, b: usize) -> [String; 2] {
-        let n = self.hosts.len();
-        assert!(
-            a < n && b < n && a != b,
-            "no pair of distinct hosts ({a}, {b}) among {n}"
-        );
-        let rule = |from: usize, to: usize| {
-            format!("-m physdev --physdev-in v{from} --physdev-out v{to} -j DROP")
-        };
-        [rule(a, b), rule(b, a)]
-    }
-
     /// Hosts in different groups can no longer exchange any packet (both
     /// directions); hosts in no group are not affected. Replaces the
     /// previous partition.
     pub(crate) fn partition(&self, groups: &[Vec<usize>]) {
-        let mut rules = Vec::new();
+        let mut pairs = Vec::new();
         for (g, group) in groups.iter().enumerate() {
             for other in &groups[g + 1..] {
                 for &a in group {
-                    for &b in other {
-                        rules.extend(self.drop_between(a, b));
-                    }
+                    pairs.extend(other.iter().map(|&b| (a, b)));
                 }
             }
         }
-        self.set_chain(PARTITION, &rules);
+        self.set_pairs(Pairs::Partition, &pairs);
     }
 
     /// Removes the partition.
     pub(crate) fn heal(&self) {
-        self.set_chain(PARTITION, &[]);
+        self.set_pairs(Pairs::Partition, &[]);
     }
 
     /// Drops all packets between each given pair of hosts, replacing the
     /// previous set of cut pairs (`&[]` removes them): a range-limited radio,
-    /// updated by the caller as the vessels move. One process per update.
+    /// updated by the caller as the vessels move. Only what changed is
+    /// written, in milliseconds (see the module doc).
     pub(crate) fn cut_pairs(&self, pairs: &[(usize, usize)]) {
-        let rules: Vec<String> = pairs
+        self.set_pairs(Pairs::Cut, pairs);
+    }
+
+    /// Makes `pairs` the pairs of kind `kind` that hear nothing of each
+    /// other: each host's list holds the addresses it must not receive from.
+    fn set_pairs(&self, kind: Pairs, pairs: &[(usize, usize)]) {
+        let n = self.hosts.len();
+        let wanted: BTreeSet<(usize, usize)> = pairs
             .iter()
-            .flat_map(|&(a, b)| self.drop_between(a, b))
+            .map(|&(a, b)| {
+                assert!(
+                    a < n && b < n && a != b,
+                    "no pair of distinct hosts ({a}, {b}) among {n}"
+                );
+                (a.min(b), a.max(b))
+            })
             .collect();
-        self.set_chain(CUT, &rules);
+        for port in 0..n {
+            let held = wanted
+                .iter()
+                .filter(|(a, b)| *a == port || *b == port)
+                .count();
+            assert!(
+                held <= LIST_SIZE,
+                "host {port} cut from {held} hosts: an xt_recent list holds {LIST_SIZE}"
+            );
+        }
+        let mut now = match kind {
+            Pairs::Partition => &self.parted,
+            Pairs::Cut => &self.cut,
+        }
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+        for (sign, changed) in [
+            ("+", wanted.difference(&now)),
+            ("-", now.difference(&wanted)),
+        ] {
+            for &(a, b) in changed {
+                self.write_list(&kind.list(b), &format!("{sign}{}", self.ip(a)));
+                self.write_list(&kind.list(a), &format!("{sign}{}", self.ip(b)));
+            }
+        }
+        *now = wanted;
+    }
+
+    /// One command (`+ADDR` or `-ADDR`) to the medium's `xt_recent` list.
+    fn write_list(&self, list: &str, command: &str) {
+        let pid = self.holder.as_ref().expect("the medium's holder").id();
+        let path = format!("/proc/{pid}/net/xt_recent/{list}");
+        std::fs::OpenOptions::new()
+            .write(true)
+            .open(&path)
+            .and_then(|mut f| f.write_all(command.as_bytes()))
+            .unwrap_or_else(|e| panic!("{path}: writing {command:?}: {e}"));
     }
 
     /// Every forwarded packet is dropped with probability `p`, independently
@@ -462,6 +556,10 @@ impl Medium {
 
 impl Drop for Medium {
     fn drop(&mut self) {
+        if let Some(mut holder) = self.holder.take() {
+            let _ = holder.kill();
+            let _ = holder.wait();
+        }
         // Hosts first (their veth pairs go with them), then the medium.
         for ns in self.hosts.iter().chain([&self.medium]) {
             // Where `ip netns add` mounts them (NETNS_RUN_DIR).
