@@ -46,8 +46,8 @@ use seacover::mission::Mission;
 
 use crate::common::process::signal;
 use crate::common::sitl::{
-    Boat, Bridge, SITL, SPEEDUP, Seen, Station, ardupilot, boat, east_north, mission_toml, place,
-    wait_for,
+    Boat, Bridge, SPEEDUP, Seen, Station, ardupilot, boat, east_north, mission_toml,
+    one_sitl_fleet, place, wait_for,
 };
 
 /// Boats, and bridges.
@@ -291,7 +291,7 @@ fn digest(id: &str, bridge: &Bridge) -> String {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn four_peer_bridges_converge_without_a_coordinator_and_take_over_a_killed_ones_water() {
     let Some(ap) = ardupilot() else { return };
-    let _one = SITL.lock().await;
+    let _one = one_sitl_fleet().await;
     let began = Instant::now();
     let dir = tempfile::tempdir().unwrap();
     let (mission_path, mission) = mission_file(dir.path());

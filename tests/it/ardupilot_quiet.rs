@@ -15,12 +15,12 @@ use std::time::Duration;
 use crate::common::sitl::{
     Boat, Bridge, Coordinator, Station, boat, coverage_now, mission, place, quiet_arrival, wait_for,
 };
-use crate::common::sitl::{SITL, ardupilot};
+use crate::common::sitl::{ardupilot, one_sitl_fleet};
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn boats_handed_their_goals_keep_station_on_their_own_loiter() {
     let Some(ap) = ardupilot() else { return };
-    let _one = SITL.lock().await;
+    let _one = one_sitl_fleet().await;
     let dir = tempfile::tempdir().unwrap();
     let config = mission(dir.path());
     let coordinator = Coordinator::start(&dir.path().join("data"), &config, "127.0.0.1:0");

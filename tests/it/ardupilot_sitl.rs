@@ -34,7 +34,7 @@ use crate::common::sitl::{
     Boat, Bridge, Coordinator, ORIGIN, Seen, Station, all_stopped, boat, coverage_now, east_north,
     mission, place, quiet_over, under_way, wait_for,
 };
-pub(crate) use crate::common::sitl::{SITL, ardupilot};
+pub(crate) use crate::common::sitl::{ardupilot, one_sitl_fleet};
 
 fn vessel<'a>(vessels: &'a [VesselStatusDocument], id: &str) -> Option<&'a VesselStatusDocument> {
     vessels.iter().find(|v| v.id == id)
@@ -89,7 +89,7 @@ fn pose_error(v: &VesselStatusDocument, station: &Station) -> Option<(f64, f64)>
 async fn four_boats_converge_follow_conventions_yield_to_the_operator_and_stop_without_a_coordinator()
  {
     let Some(ap) = ardupilot() else { return };
-    let _one = SITL.lock().await;
+    let _one = one_sitl_fleet().await;
     let dir = tempfile::tempdir().unwrap();
     let config = mission(dir.path());
     let data = dir.path().join("data");
@@ -583,7 +583,7 @@ fn position_at(lat: f64, lon: f64, time_ms: u32) -> MavMessage {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn bad_mavlink_input_changes_nothing() {
     let Some(ap) = ardupilot() else { return };
-    let _one = SITL.lock().await;
+    let _one = one_sitl_fleet().await;
     let dir = tempfile::tempdir().unwrap();
     let config = mission(dir.path());
     let coordinator = Coordinator::start(&dir.path().join("data"), &config, "127.0.0.1:0");

@@ -38,7 +38,7 @@ async fn sitl_boats_starts_and_stops_boats() {
     let Some(ardupilot) = crate::ardupilot_sitl::ardupilot() else {
         return;
     };
-    let _one_fleet = crate::ardupilot_sitl::SITL.lock().await;
+    let _one_fleet = crate::ardupilot_sitl::one_sitl_fleet().await;
     let script = concat!(env!("CARGO_MANIFEST_DIR"), "/scripts/sitl-boats");
     let child = Command::new(script)
         .args(["2", "--speedup", "4", "--first-instance"])

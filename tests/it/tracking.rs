@@ -59,7 +59,7 @@ fn worst(poses: &[PoseRecord], key: &str) -> Worst {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_demo_fleet_follows_its_commands() {
-    let _heavy = crate::common::machine::HEAVY.lock().await;
+    let _heavy = crate::common::machine::heavy_async().await;
     let dir = tempfile::tempdir().unwrap();
     let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
     let stop = tokio_util::sync::CancellationToken::new();

@@ -37,10 +37,9 @@ pub(crate) fn browser() -> Result<(PathBuf, PathBuf), String> {
 /// before the test starts anything timed), or `None` after saying why the
 /// test is skipped; under `CI=true` a missing browser fails the test
 /// instead.
-pub(crate) async fn browser_or_skip()
--> Option<(PathBuf, PathBuf, tokio::sync::MutexGuard<'static, ()>)> {
+pub(crate) async fn browser_or_skip() -> Option<(PathBuf, PathBuf, super::machine::Heavy)> {
     match browser() {
-        Ok((driver, chrome)) => Some((driver, chrome, super::machine::HEAVY.lock().await)),
+        Ok((driver, chrome)) => Some((driver, chrome, super::machine::heavy_async().await)),
         Err(why) if std::env::var("CI").as_deref() == Ok("true") => {
             panic!("{why}: CI must install chromium and chromium-driver")
         }

@@ -104,7 +104,7 @@ pub(crate) struct Fleet {
     pub logs: tempfile::TempDir,
     pub medium: Medium,
     /// The machine, until everything above is gone ([`super::machine`]).
-    _heavy: tokio::sync::MutexGuard<'static, ()>,
+    _heavy: super::machine::Heavy,
 }
 
 impl Fleet {

@@ -29,7 +29,7 @@ pub(crate) const SPEEDUP: u32 = 4;
 pub(crate) const ORIGIN: (f64, f64) = (-35.363261, 149.165230);
 /// One SITL fleet at a time (their ports are fixed), and nothing else
 /// heavy beside it: the machine's lock ([`super::machine`]).
-pub(crate) static SITL: &tokio::sync::Mutex<()> = &super::machine::HEAVY;
+pub(crate) use super::machine::heavy_async as one_sitl_fleet;
 
 pub(crate) struct Ardupilot {
     pub binary: PathBuf,
