@@ -51,9 +51,10 @@
 //!   no data and are left alone).
 //! - A condition of one kind replaces the previous one of its kind; kinds
 //!   combine (a partition and a loss rate at the same time).
-//! - Processes are only started by the caller ([`Medium::command`]),
-//!   except the medium's own `sleep`, which it kills on [`Drop`]. A namespace deleted while a process is still in
-//!   it lives on until that process exits.
+//! - Processes are only started by the caller ([`Medium::command`]), except
+//!   the medium's own `sleep`, which it kills on [`Drop`]. A namespace
+//!   deleted while a process is still in it lives on until that process
+//!   exits.
 //! - Every command's exit status is checked: a failure panics naming the
 //!   command and its stderr. Everything is synchronous.
 //!
