@@ -15,8 +15,9 @@
 //!   driven by the links. The mission ticks at [`TICK_HZ`] instead of
 //!   10 Hz so that the coordinator keeps up at [`WARP`] on two cores shared
 //!   with the load client (docs/performance.md, "A day at sea").
-//!   Judged: resident memory after the first mission hour within 10 % of
-//!   its value at that hour; the recordings never above the byte limit,
+//!   Judged: resident memory after mission hour 2 within 10 % of its
+//!   highest in hour 2 (the recorder's files span an hour, and the heap
+//!   rises and falls with each: [`memory_after`]); the recordings never above the byte limit,
 //!   and spanning no more than the time limit plus one file; every file
 //!   at most an hour of mission time, each readable on its own by `seacover
 //!   record info`; the load client's links all held; few ticks skipped.
@@ -98,17 +99,27 @@ fn recordings(dir: &Path) -> (Vec<PathBuf>, u64) {
     (files, bytes)
 }
 
-/// The samples' resident memory at the first sample past `from` and the
-/// most after it, in bytes.
-fn memory_after(samples: &[Sample], from: f64) -> (u64, u64, f64) {
-    let after: Vec<&Sample> = samples.iter().filter(|s| s.t >= from).collect();
-    let first = after.first().expect("samples past the first hour").rss;
-    let (most, at) = after
+/// The highest resident memory over the mission times `reference`, and
+/// the highest after it with its mission time, in bytes. A peak against a
+/// peak: the coordinator's live heap rises and falls with each hour's
+/// recording file (heaptrack over a day: 4.8 MB after a rotation, 10.4–
+/// 10.8 MB before the next from hour 2 on), so a single sample taken just
+/// after a rotation was a trough, and judging later peaks against it
+/// measured that swing, not growth (docs/performance.md, "A day at sea").
+fn memory_after(samples: &[Sample], reference: std::ops::Range<f64>) -> (u64, u64, f64) {
+    let base = samples
         .iter()
+        .filter(|s| reference.contains(&s.t))
+        .map(|s| s.rss)
+        .max()
+        .expect("samples in the reference span");
+    let (most, at) = samples
+        .iter()
+        .filter(|s| s.t >= reference.end)
         .map(|s| (s.rss, s.t))
         .max_by_key(|&(r, _)| r)
-        .expect("a sample");
-    (first, most, at)
+        .expect("a sample after the reference span");
+    (base, most, at)
 }
 
 /// The figures, one line per mission hour, for the log (and
@@ -331,11 +342,11 @@ async fn a_day_at_sea_coordinator() {
             failures.push(what);
         }
     };
-    let (at_hour, most, most_at) = memory_after(samples, HOUR);
+    let (at_hour, most, most_at) = memory_after(samples, HOUR..2.0 * HOUR);
     check(
         most as f64 <= at_hour as f64 * (1.0 + FLAT),
         format!(
-            "resident memory {:.1} MB at mission hour {:.1}, {:.1} MB at hour 1: more than {}% growth",
+            "resident memory {:.1} MB at mission hour {:.1}, at most {:.1} MB in hour 2: more than {}% growth",
             most as f64 / 1e6,
             most_at / HOUR,
             at_hour as f64 / 1e6,
@@ -389,8 +400,8 @@ async fn a_day_at_sea_coordinator() {
         format!("the load client's links: {links}"),
     );
     eprintln!(
-        "SUMMARY {test}: warp {WARP}, {TICK_HZ} Hz, 8 links at {POSE_HZ} Hz; {:.0} s wall; RSS {:.1} MB \
-         at hour 1, at most {:.1} MB after (hour {:.1}); recordings at most {:.1} MB, {} files at the end \
+        "SUMMARY {test}: warp {WARP}, {TICK_HZ} Hz, 8 links at {POSE_HZ} Hz; {:.0} s wall; RSS at most {:.1} MB \
+         in hour 2, at most {:.1} MB after (hour {:.1}); recordings at most {:.1} MB, {} files at the end \
          ({:.1} MB, {:.2} h), {deleted} deleted; ticks skipped {skipped} of {tick}; machine busy {:.2} \
          cores ({others:.2} outside the coordinator and the load client); load client: {}",
         day.elapsed.as_secs_f64(),
@@ -424,6 +435,10 @@ async fn a_day_at_sea_coordinator() {
 const PEER_WARP: f64 = 50.0;
 /// The peer fleet's mission time [s].
 const PEER_SPAN: f64 = 2.0 * HOUR;
+/// The peer fleet's resident memory after this mission time [s] is judged
+/// against its highest since the first hour: it has no hourly cycle (no
+/// recording), only its neighbour tables, full within minutes.
+const PEER_REFERENCE: f64 = 1.25 * HOUR;
 
 /// A peer fleet: one real `seacover agent --peer --mission
 /// examples/paper.json` process running eight vessels (as an operator
@@ -431,8 +446,8 @@ const PEER_SPAN: f64 = 2.0 * HOUR;
 /// that its Zenoh scouting meets no other test's fleet. Its hulls are full
 /// simulations at 1 kHz of mission time, so a day (29 minutes at
 /// [`PEER_WARP`]) does not fit CI's budget: [`PEER_SPAN`] does, and the
-/// day was measured outside it (docs/performance.md). Judged: resident memory after the first
-/// mission hour within 10 % of its value at that hour; and that the fleet
+/// day was measured outside it (docs/performance.md). Judged: resident memory after mission
+/// hour 1.25 within 10 % of its highest since hour 1; and that the fleet
 /// kept up, from outside: the independent observer (tests/python/
 /// observer.py, in a second host) counts each vessel's beacons over the
 /// last seconds, which must come at 5 per second of mission time.
@@ -444,7 +459,7 @@ fn peer_fleet_memory_is_flat() {
     use crate::common::peer::Observer;
     let test = "soak::peer_fleet_memory_is_flat";
     let Some(python) = skip(test) else { return };
-    let quiet = wait_quiet(Duration::from_secs(30));
+    let quiet = wait_quiet(Duration::from_secs(10));
     let medium = Medium::new(2);
     let fleet = format!("soak{}", std::process::id());
     let log = tempfile::NamedTempFile::new().unwrap();
@@ -515,10 +530,10 @@ fn peer_fleet_memory_is_flat() {
         };
         rates.push((id, rate, heard_share));
     }
-    let (at_hour, most, most_at) = memory_after(&samples, HOUR);
+    let (at_hour, most, most_at) = memory_after(&samples, HOUR..PEER_REFERENCE);
     eprintln!(
         "SUMMARY {test}: 8 vessels in one process, warp {PEER_WARP}, {:.1} h of mission time in {:.0} s; \
-         RSS {:.1} MB at hour 1, at most {:.1} MB after (hour {:.2}); (vessel, beacons sent per mission second / 5, \
+         RSS at most {:.1} MB in hours 1 to 1.25, at most {:.1} MB after (hour {:.2}); (vessel, beacons sent per mission second / 5, \
          share the observer heard): {rates:?}; \
          the machine {:.0} % busy the second before it started",
         PEER_SPAN / HOUR,
@@ -531,7 +546,7 @@ fn peer_fleet_memory_is_flat() {
     let mut failures = Vec::new();
     if most as f64 > at_hour as f64 * (1.0 + FLAT) {
         failures.push(format!(
-            "resident memory {:.1} MB at mission hour {:.2}, {:.1} MB at hour 1",
+            "resident memory {:.1} MB at mission hour {:.2}, at most {:.1} MB in hours 1 to 1.25",
             most as f64 / 1e6,
             most_at / HOUR,
             at_hour as f64 / 1e6
