@@ -459,7 +459,7 @@ fn peer_fleet_memory_is_flat() {
     use crate::common::peer::Observer;
     let test = "soak::peer_fleet_memory_is_flat";
     let Some(python) = skip(test) else { return };
-    let quiet = wait_quiet(Duration::from_secs(10));
+    let quiet = wait_quiet(Duration::from_secs(30));
     let medium = Medium::new(2);
     let fleet = format!("soak{}", std::process::id());
     let log = tempfile::NamedTempFile::new().unwrap();
