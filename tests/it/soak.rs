@@ -17,10 +17,11 @@
 //!   with the load client (docs/performance.md, "A day at sea").
 //!   Judged: resident memory after mission hour 2 within 10 % of its
 //!   highest in hour 2 (the recorder's files span an hour, and the heap
-//!   rises and falls with each: [`memory_after`]); the recordings never above the byte limit,
-//!   and spanning no more than the time limit plus one file; every file
-//!   at most an hour of mission time, each readable on its own by `seacover
-//!   record info`; the load client's links all held; few ticks skipped.
+//!   rises and falls with each: [`memory_after`]); the recordings never
+//!   above the byte limit, and spanning no more than the time limit plus
+//!   one file; every file at most an hour of mission time, each readable
+//!   on its own by `seacover record info`; the load client's links all
+//!   held; few ticks skipped.
 //! - A peer fleet (`peer_fleet_memory_is_flat`): see its doc.
 //!
 //! Nothing scrapes the coordinator's `/metrics` during the run (the load
@@ -342,14 +343,14 @@ async fn a_day_at_sea_coordinator() {
             failures.push(what);
         }
     };
-    let (at_hour, most, most_at) = memory_after(samples, HOUR..2.0 * HOUR);
+    let (base, most, most_at) = memory_after(samples, HOUR..2.0 * HOUR);
     check(
-        most as f64 <= at_hour as f64 * (1.0 + FLAT),
+        most as f64 <= base as f64 * (1.0 + FLAT),
         format!(
             "resident memory {:.1} MB at mission hour {:.1}, at most {:.1} MB in hour 2: more than {}% growth",
             most as f64 / 1e6,
             most_at / HOUR,
-            at_hour as f64 / 1e6,
+            base as f64 / 1e6,
             FLAT * 100.0
         ),
     );
@@ -405,7 +406,7 @@ async fn a_day_at_sea_coordinator() {
          ({:.1} MB, {:.2} h), {deleted} deleted; ticks skipped {skipped} of {tick}; machine busy {:.2} \
          cores ({others:.2} outside the coordinator and the load client); load client: {}",
         day.elapsed.as_secs_f64(),
-        at_hour as f64 / 1e6,
+        base as f64 / 1e6,
         most as f64 / 1e6,
         most_at / HOUR,
         disk_most as f64 / 1e6,
@@ -530,7 +531,7 @@ fn peer_fleet_memory_is_flat() {
         };
         rates.push((id, rate, heard_share));
     }
-    let (at_hour, most, most_at) = memory_after(&samples, HOUR..PEER_REFERENCE);
+    let (base, most, most_at) = memory_after(&samples, HOUR..PEER_REFERENCE);
     eprintln!(
         "SUMMARY {test}: 8 vessels in one process, warp {PEER_WARP}, {:.1} h of mission time in {:.0} s; \
          RSS at most {:.1} MB in hours 1 to 1.25, at most {:.1} MB after (hour {:.2}); (vessel, beacons sent per mission second / 5, \
@@ -538,18 +539,18 @@ fn peer_fleet_memory_is_flat() {
          the machine {:.0} % busy the second before it started",
         PEER_SPAN / HOUR,
         wall.elapsed().as_secs_f64(),
-        at_hour as f64 / 1e6,
+        base as f64 / 1e6,
         most as f64 / 1e6,
         most_at / HOUR,
         quiet * 100.0,
     );
     let mut failures = Vec::new();
-    if most as f64 > at_hour as f64 * (1.0 + FLAT) {
+    if most as f64 > base as f64 * (1.0 + FLAT) {
         failures.push(format!(
             "resident memory {:.1} MB at mission hour {:.2}, at most {:.1} MB in hours 1 to 1.25",
             most as f64 / 1e6,
             most_at / HOUR,
-            at_hour as f64 / 1e6
+            base as f64 / 1e6
         ));
     }
     for (id, rate, _) in &rates {
