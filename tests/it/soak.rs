@@ -343,14 +343,18 @@ async fn a_day_at_sea_coordinator() {
             failures.push(what);
         }
     };
-    let (base, most, most_at) = memory_after(samples, HOUR..2.0 * HOUR);
+    let reference = HOUR..2.0 * HOUR;
+    let (base, most, most_at) = memory_after(samples, reference.clone());
     check(
         most as f64 <= base as f64 * (1.0 + FLAT),
         format!(
-            "resident memory {:.1} MB at mission hour {:.1}, at most {:.1} MB in hour 2: more than {}% growth",
+            "resident memory {:.1} MB at mission hour {:.1}, at most {:.1} MB in hours {} to {}: more \
+             than {}% growth",
             most as f64 / 1e6,
             most_at / HOUR,
             base as f64 / 1e6,
+            reference.start / HOUR,
+            reference.end / HOUR,
             FLAT * 100.0
         ),
     );
@@ -402,11 +406,13 @@ async fn a_day_at_sea_coordinator() {
     );
     eprintln!(
         "SUMMARY {test}: warp {WARP}, {TICK_HZ} Hz, 8 links at {POSE_HZ} Hz; {:.0} s wall; RSS at most {:.1} MB \
-         in hour 2, at most {:.1} MB after (hour {:.1}); recordings at most {:.1} MB, {} files at the end \
+         in hours {} to {}, at most {:.1} MB after (hour {:.1}); recordings at most {:.1} MB, {} files at the end \
          ({:.1} MB, {:.2} h), {deleted} deleted; ticks skipped {skipped} of {tick}; machine busy {:.2} \
          cores ({others:.2} outside the coordinator and the load client); load client: {}",
         day.elapsed.as_secs_f64(),
         base as f64 / 1e6,
+        reference.start / HOUR,
+        reference.end / HOUR,
         most as f64 / 1e6,
         most_at / HOUR,
         disk_most as f64 / 1e6,
@@ -531,15 +537,18 @@ fn peer_fleet_memory_is_flat() {
         };
         rates.push((id, rate, heard_share));
     }
-    let (base, most, most_at) = memory_after(&samples, HOUR..PEER_REFERENCE);
+    let reference = HOUR..PEER_REFERENCE;
+    let (base, most, most_at) = memory_after(&samples, reference.clone());
     eprintln!(
         "SUMMARY {test}: 8 vessels in one process, warp {PEER_WARP}, {:.1} h of mission time in {:.0} s; \
-         RSS at most {:.1} MB in hours 1 to 1.25, at most {:.1} MB after (hour {:.2}); (vessel, beacons sent per mission second / 5, \
+         RSS at most {:.1} MB in hours {} to {}, at most {:.1} MB after (hour {:.2}); (vessel, beacons sent per mission second / 5, \
          share the observer heard): {rates:?}; \
          the machine {:.0} % busy the second before it started",
         PEER_SPAN / HOUR,
         wall.elapsed().as_secs_f64(),
         base as f64 / 1e6,
+        reference.start / HOUR,
+        reference.end / HOUR,
         most as f64 / 1e6,
         most_at / HOUR,
         quiet * 100.0,
@@ -547,10 +556,12 @@ fn peer_fleet_memory_is_flat() {
     let mut failures = Vec::new();
     if most as f64 > base as f64 * (1.0 + FLAT) {
         failures.push(format!(
-            "resident memory {:.1} MB at mission hour {:.2}, at most {:.1} MB in hours 1 to 1.25",
+            "resident memory {:.1} MB at mission hour {:.2}, at most {:.1} MB in hours {} to {}",
             most as f64 / 1e6,
             most_at / HOUR,
-            base as f64 / 1e6
+            base as f64 / 1e6,
+            reference.start / HOUR,
+            reference.end / HOUR
         ));
     }
     for (id, rate, _) in &rates {
