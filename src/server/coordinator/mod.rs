@@ -408,12 +408,7 @@ impl Coordinator {
                     }
                 }
                 request = requests.recv() => match request {
-                    Some(r) => {
-                        if self.on_request(r) {
-                            // A change published a newer snapshot.
-                            fanout = None;
-                        }
-                    }
+                    Some(r) => self.serve(r, &mut fanout),
                     None => break,
                 },
             }
@@ -438,8 +433,20 @@ impl Coordinator {
         self.tick as f64 / self.mission.tick_hz()
     }
 
-    /// Serves one request; `true` when it published a snapshot.
-    fn on_request(&mut self, request: Request) -> bool {
+    /// Serves one request, after publishing the tick whose commands are
+    /// still on their way, if any. That tick's snapshot shows the fleet as
+    /// it was when the commands were handed out: a link that goes down
+    /// after writing its command and before the fan-out ends is still
+    /// connected in it, so the recording holds every command written.
+    fn serve(&mut self, request: Request, pending: &mut Option<Fanout>) {
+        if let Some(tick) = pending.take() {
+            self.finish_tick(tick.published);
+        }
+        self.on_request(request);
+    }
+
+    /// Serves one request.
+    fn on_request(&mut self, request: Request) {
         match request {
             Request::Register {
                 id,
@@ -475,13 +482,10 @@ impl Coordinator {
                     mission,
                 });
                 let _ = reply.send(welcomed);
-                false
             }
             Request::Change { change, reply } => {
                 let outcome = self.change(&change);
-                let changed = outcome.is_ok();
                 let _ = reply.send(outcome);
-                changed
             }
             Request::PeerNeighbours(counts) => {
                 for (id, n) in counts {
@@ -489,7 +493,6 @@ impl Coordinator {
                         entry.neighbours = Some(n);
                     }
                 }
-                false
             }
             Request::Forget { id, reply } => {
                 let outcome = match self.vessels.remove(&id) {
@@ -518,9 +521,7 @@ impl Coordinator {
                     }
                     None => Err(CoordinatorError::NoVessel(id.clone())),
                 };
-                let forgotten = outcome.is_ok();
                 let _ = reply.send(outcome);
-                forgotten
             }
             Request::Gone { id, link } => {
                 let (tick, bench) = (
@@ -540,7 +541,6 @@ impl Coordinator {
                         take_pose(&id, entry, &mut link, tick, &bench);
                     }
                 }
-                false
             }
         }
     }
