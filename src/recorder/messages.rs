@@ -339,7 +339,7 @@ mod tests {
 
     /// A tick of a fleet with different β: its curved cells keep their
     /// exact edges (unrounded), a vessel its own actuator, and the message
-    /// is valid against the schema the channel carries.
+    /// reads back as it was written.
     #[test]
     fn curved_cells_are_recorded_with_their_edges() {
         let text = include_str!("../../examples/island-mixed.json");
@@ -371,15 +371,10 @@ mod tests {
             assert_eq!(c.edges, d.edges);
             assert_eq!(c.document().edges, d.edges);
         }
+        // The channel's schema accepts curved cells: tests/it/curved.rs
+        // records a curved fleet and validates every message with an
+        // independent checker (tests/python/check_recording.py).
         let value = serde_json::to_value(&record).unwrap();
-        let schema: serde_json::Value =
-            serde_json::from_slice(&spec::<CoverageRecord>().schema).unwrap();
-        let validator = jsonschema::draft202012::new(&schema).unwrap();
-        let errors: Vec<String> = validator
-            .iter_errors(&value)
-            .map(|e| e.to_string())
-            .collect();
-        assert!(errors.is_empty(), "{errors:?}");
         assert!(value.to_string().contains(r#""kind":"arc""#));
         let back: CoverageRecord = serde_json::from_value(value).unwrap();
         assert_eq!(back, record);

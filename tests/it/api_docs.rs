@@ -2,7 +2,8 @@
 //! `api/vessel-link.schema.json` and `api/peer-wire.schema.json` must be
 //! what the code generates today, the server must serve the first, and all
 //! must accept what the real server and the real protocol types put on the
-//! wire (and reject what serde rejects). The worked beacon example in
+//! wire (and reject what serde rejects), as an independent checker says
+//! (Python's `jsonschema`, [`Validator`]). The worked beacon example in
 //! `docs/peer.md` (its CBOR bytes, byte by byte, and the decoded map) must
 //! be what the real encoder makes of it today.
 //!
@@ -14,10 +15,8 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use crate::common::inprocess::Server;
+use crate::common::schema::Validator;
 use futures_util::{SinkExt, StreamExt};
-use schemars::generate::SchemaSettings;
-use seacover::agent::peer::wire;
-use seacover::protocol::peer::{BeaconDocument, PeerMissionDocument, PeerStatusDocument};
 use seacover::protocol::{
     CommandDocument, CoordinatorMessage, FixDocument, PoseDocument, VesselMessage,
 };
@@ -25,6 +24,8 @@ use seacover::server::ServeConfig;
 use seacover::server::openapi;
 use serde_json::{Value, json};
 use tokio_tungstenite::tungstenite::Message;
+
+mod peer;
 
 const REFRESH: &str = "SEACOVER_BLESS=1 cargo test --test it api_docs::";
 
@@ -82,19 +83,35 @@ fn openapi_document() -> Value {
     serde_json::from_str(openapi::json()).unwrap()
 }
 
-/// Errors of `instance` against `schema`, one line each.
-fn errors(schema: &Value, instance: &Value) -> Vec<String> {
-    let validator = jsonschema::draft202012::new(schema).expect("a valid schema");
-    validator
-        .iter_errors(instance)
-        .map(|e| format!("{e} at {}", e.instance_path()))
-        .collect()
+/// Asserts that `schema` accepts `instance` (an independent checker says).
+#[track_caller]
+fn assert_valid(checker: &mut Validator, schema: &Value, instance: &Value) {
+    let errors = checker.errors(schema, instance);
+    assert!(errors.is_empty(), "{instance} was rejected: {errors:#?}");
 }
 
-#[track_caller]
-fn assert_valid(schema: &Value, instance: &Value) {
-    let errors = errors(schema, instance);
-    assert!(errors.is_empty(), "{instance} was rejected: {errors:#?}");
+/// Every `$ref` in `schema` points at a part of it that exists: the
+/// documents stand alone.
+fn assert_refs_resolve(name: &str, schema: &Value, node: &Value) {
+    match node {
+        Value::Object(map) => {
+            if let Some(r) = map.get("$ref").and_then(Value::as_str) {
+                let pointer = r
+                    .strip_prefix('#')
+                    .unwrap_or_else(|| panic!("{name}: {r} is not local"));
+                assert!(
+                    schema.pointer(pointer).is_some(),
+                    "{name}: {r} points nowhere"
+                );
+            }
+            map.values()
+                .for_each(|v| assert_refs_resolve(name, schema, v));
+        }
+        Value::Array(items) => items
+            .iter()
+            .for_each(|v| assert_refs_resolve(name, schema, v)),
+        _ => {}
+    }
 }
 
 /// The OpenAPI component `name` as a stand-alone schema: its `$ref`s point
@@ -113,13 +130,22 @@ fn component(doc: &Value, name: &str) -> Value {
 
 #[test]
 fn the_documents_are_valid_schemas() {
-    jsonschema::meta::validate(&link_schema()).expect("the link schema is a JSON Schema");
+    let Some(mut checker) = Validator::start("api_docs::the_documents_are_valid_schemas") else {
+        return;
+    };
+    let link = link_schema();
+    assert_eq!(
+        checker.meta_errors(&link),
+        Vec::<String>::new(),
+        "the link schema"
+    );
+    assert_refs_resolve("the link schema", &link, &link);
     let doc = openapi_document();
     assert_eq!(doc["openapi"], "3.1.0");
     for name in doc["components"]["schemas"].as_object().unwrap().keys() {
         let schema = component(&doc, name);
-        jsonschema::meta::validate(&schema).unwrap_or_else(|e| panic!("{name}: {e}"));
-        jsonschema::draft202012::new(&schema).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(checker.meta_errors(&schema), Vec::<String>::new(), "{name}");
+        assert_refs_resolve(name, &schema, &schema);
     }
 }
 
@@ -201,6 +227,10 @@ fn pose() -> PoseDocument {
 /// by serde: the schema must accept each, and serde must read each back.
 #[test]
 fn the_link_schema_accepts_the_real_messages() {
+    let Some(mut checker) = Validator::start("api_docs::the_link_schema_accepts_the_real_messages")
+    else {
+        return;
+    };
     let schema = link_schema();
     let vessel = [
         VesselMessage::Hello {
@@ -241,7 +271,7 @@ fn the_link_schema_accepts_the_real_messages() {
         }),
     ];
     for m in &vessel {
-        assert_valid(&schema, &serde_json::to_value(m).unwrap());
+        assert_valid(&mut checker, &schema, &serde_json::to_value(m).unwrap());
     }
     let coordinator = [
         CoordinatorMessage::Welcome {
@@ -270,7 +300,7 @@ fn the_link_schema_accepts_the_real_messages() {
         },
     ];
     for m in &coordinator {
-        assert_valid(&schema, &serde_json::to_value(m).unwrap());
+        assert_valid(&mut checker, &schema, &serde_json::to_value(m).unwrap());
     }
 }
 
@@ -279,6 +309,11 @@ fn the_link_schema_accepts_the_real_messages() {
 /// numbers), the schema accepts.
 #[test]
 fn the_link_schema_agrees_with_serde_on_edge_cases() {
+    let Some(mut checker) =
+        Validator::start("api_docs::the_link_schema_agrees_with_serde_on_edge_cases")
+    else {
+        return;
+    };
     let schema = link_schema();
     let cases = [
         json!({"type": "hello", "vessel": "a", "protocol": 1, "actuator": null}),
@@ -310,7 +345,7 @@ fn the_link_schema_agrees_with_serde_on_edge_cases() {
     for case in cases {
         let serde_accepts = serde_json::from_value::<VesselMessage>(case.clone()).is_ok()
             || serde_json::from_value::<CoordinatorMessage>(case.clone()).is_ok();
-        let schema_errors = errors(&schema, &case);
+        let schema_errors = checker.errors(&schema, &case);
         assert_eq!(
             schema_errors.is_empty(),
             serde_accepts,
@@ -323,6 +358,9 @@ fn the_link_schema_agrees_with_serde_on_edge_cases() {
 /// A curved cell's edges: the schema accepts exactly what serde accepts.
 #[test]
 fn the_edge_schema_agrees_with_serde() {
+    let Some(mut checker) = Validator::start("api_docs::the_edge_schema_agrees_with_serde") else {
+        return;
+    };
     use seacover::protocol::EdgeDocument;
     let doc = openapi_document();
     let schema = component(&doc, "EdgeDocument");
@@ -338,7 +376,11 @@ fn the_edge_schema_agrees_with_serde() {
     ];
     for case in cases {
         let serde_accepts = serde_json::from_value::<EdgeDocument>(case.clone()).is_ok();
-        assert_eq!(errors(&schema, &case).is_empty(), serde_accepts, "{case}");
+        assert_eq!(
+            checker.errors(&schema, &case).is_empty(),
+            serde_accepts,
+            "{case}"
+        );
     }
 }
 
@@ -346,6 +388,11 @@ fn the_edge_schema_agrees_with_serde() {
 /// serde accepts.
 #[test]
 fn the_openapi_request_schemas_agree_with_serde() {
+    let Some(mut checker) =
+        Validator::start("api_docs::the_openapi_request_schemas_agree_with_serde")
+    else {
+        return;
+    };
     use seacover::protocol::{
         RegionDocument, RegionInput, RiskObjectDocument, RiskObjectInput, ScenarioDocument,
     };
@@ -388,7 +435,11 @@ fn the_openapi_request_schemas_agree_with_serde() {
     let schema = component(&doc, "ScenarioDocument");
     for case in scenarios {
         let serde_accepts = serde_json::from_value::<ScenarioDocument>(case.clone()).is_ok();
-        assert_eq!(errors(&schema, &case).is_empty(), serde_accepts, "{case}");
+        assert_eq!(
+            checker.errors(&schema, &case).is_empty(),
+            serde_accepts,
+            "{case}"
+        );
     }
     let objects = [
         json!({"x": 1, "y": 2, "alpha": 3, "sigma": 4}),
@@ -400,7 +451,11 @@ fn the_openapi_request_schemas_agree_with_serde() {
     let schema = component(&doc, "RiskObjectDocument");
     for case in objects {
         let serde_accepts = serde_json::from_value::<RiskObjectDocument>(case.clone()).is_ok();
-        assert_eq!(errors(&schema, &case).is_empty(), serde_accepts, "{case}");
+        assert_eq!(
+            checker.errors(&schema, &case).is_empty(),
+            serde_accepts,
+            "{case}"
+        );
     }
     let regions = [
         json!({"polygon": square}),
@@ -411,7 +466,11 @@ fn the_openapi_request_schemas_agree_with_serde() {
     let schema = component(&doc, "RegionDocument");
     for case in &regions {
         let serde_accepts = serde_json::from_value::<RegionDocument>(case.clone()).is_ok();
-        assert_eq!(errors(&schema, case).is_empty(), serde_accepts, "{case}");
+        assert_eq!(
+            checker.errors(&schema, case).is_empty(),
+            serde_accepts,
+            "{case}"
+        );
     }
     // What PUT /api/v1/mission/region reads: those, or GeoJSON.
     let inputs = regions.iter().cloned().chain([
@@ -427,7 +486,11 @@ fn the_openapi_request_schemas_agree_with_serde() {
     let schema = component(&doc, "RegionInput");
     for case in inputs {
         let serde_accepts = serde_json::from_value::<RegionInput>(case.clone()).is_ok();
-        assert_eq!(errors(&schema, &case).is_empty(), serde_accepts, "{case}");
+        assert_eq!(
+            checker.errors(&schema, &case).is_empty(),
+            serde_accepts,
+            "{case}"
+        );
     }
     // What the risk-object writes read: at x, y or at lat, lon.
     let objects = [
@@ -444,7 +507,11 @@ fn the_openapi_request_schemas_agree_with_serde() {
     let schema = component(&doc, "RiskObjectInput");
     for case in objects {
         let serde_accepts = serde_json::from_value::<RiskObjectInput>(case.clone()).is_ok();
-        assert_eq!(errors(&schema, &case).is_empty(), serde_accepts, "{case}");
+        assert_eq!(
+            checker.errors(&schema, &case).is_empty(),
+            serde_accepts,
+            "{case}"
+        );
     }
 }
 
@@ -492,6 +559,10 @@ async fn the_server_serves_the_committed_document() {
 /// OpenAPI components their operations name.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_real_server_speaks_as_documented() {
+    let Some(mut checker) = Validator::start("api_docs::the_real_server_speaks_as_documented")
+    else {
+        return;
+    };
     let link = link_schema();
     let doc = openapi_document();
     let server = start().await;
@@ -512,11 +583,11 @@ async fn the_real_server_speaks_as_documented() {
         }
     };
     let hello = json!({"type": "hello", "vessel": "usv-1", "protocol": 1});
-    assert_valid(&link, &hello);
+    assert_valid(&mut checker, &link, &hello);
     sink.send(Message::text(hello.to_string())).await.unwrap();
     let welcome = next().await;
     assert_eq!(welcome["type"], "welcome");
-    assert_valid(&link, &welcome);
+    assert_valid(&mut checker, &link, &welcome);
 
     let pose = serde_json::to_value(VesselMessage::Pose(PoseDocument {
         x: 30.0,
@@ -524,11 +595,11 @@ async fn the_real_server_speaks_as_documented() {
         ..pose()
     }))
     .unwrap();
-    assert_valid(&link, &pose);
+    assert_valid(&mut checker, &link, &pose);
     sink.send(Message::text(pose.to_string())).await.unwrap();
     let command = loop {
         let frame = next().await;
-        assert_valid(&link, &frame);
+        assert_valid(&mut checker, &link, &frame);
         if frame["type"] == "command" {
             break frame;
         }
@@ -540,7 +611,7 @@ async fn the_real_server_speaks_as_documented() {
         .unwrap();
     let error = loop {
         let frame = next().await;
-        assert_valid(&link, &frame);
+        assert_valid(&mut checker, &link, &frame);
         if frame["type"] == "error" {
             break frame;
         }
@@ -562,15 +633,15 @@ async fn the_real_server_speaks_as_documented() {
             let items = body.as_array().unwrap();
             assert!(!items.is_empty(), "{path}");
             for item in items {
-                assert_valid(&schema, item);
+                assert_valid(&mut checker, &schema, item);
             }
         } else {
-            assert_valid(&schema, &body);
+            assert_valid(&mut checker, &schema, &body);
         }
     }
     let (status, body) = get(&server, "/api/v1/vessels/nobody").await;
     assert_eq!(status, 404);
-    assert_valid(&component(&doc, "ErrorDocument"), &body);
+    assert_valid(&mut checker, &component(&doc, "ErrorDocument"), &body);
 
     // The what-if evaluation: request and answer.
     let scenario: Value = serde_json::from_str(
@@ -580,7 +651,11 @@ async fn the_real_server_speaks_as_documented() {
         .unwrap(),
     )
     .unwrap();
-    assert_valid(&component(&doc, "ScenarioDocument"), &scenario);
+    assert_valid(
+        &mut checker,
+        &component(&doc, "ScenarioDocument"),
+        &scenario,
+    );
     let client = reqwest::Client::new();
     let response = client
         .post(server.http("/api/v1/coverage/evaluate"))
@@ -590,7 +665,11 @@ async fn the_real_server_speaks_as_documented() {
         .unwrap();
     assert_eq!(response.status(), 200);
     let evaluation: Value = response.json().await.unwrap();
-    assert_valid(&component(&doc, "EvaluationDocument"), &evaluation);
+    assert_valid(
+        &mut checker,
+        &component(&doc, "EvaluationDocument"),
+        &evaluation,
+    );
     // A fleet with different β: curved cells with their `edges`.
     let mut mixed = scenario.clone();
     mixed["vessels"][6]["beta"] = json!(0.004);
@@ -603,7 +682,11 @@ async fn the_real_server_speaks_as_documented() {
     assert_eq!(response.status(), 200);
     let evaluation: Value = response.json().await.unwrap();
     assert!(evaluation["cells"][6]["edges"].is_array(), "{evaluation}");
-    assert_valid(&component(&doc, "EvaluationDocument"), &evaluation);
+    assert_valid(
+        &mut checker,
+        &component(&doc, "EvaluationDocument"),
+        &evaluation,
+    );
     let response = client
         .post(server.http("/api/v1/coverage/evaluate"))
         .body("{\"vessels\": 3}")
@@ -612,11 +695,15 @@ async fn the_real_server_speaks_as_documented() {
         .unwrap();
     assert_eq!(response.status(), 400);
     let error: Value = response.json().await.unwrap();
-    assert_valid(&component(&doc, "ErrorDocument"), &error);
+    assert_valid(&mut checker, &component(&doc, "ErrorDocument"), &error);
 
     // A write, answered as documented (201 and the stored object).
     let object = json!({"x": 10, "y": 20, "alpha": 3, "sigma": 5});
-    assert_valid(&component(&doc, "RiskObjectDocument"), &object);
+    assert_valid(
+        &mut checker,
+        &component(&doc, "RiskObjectDocument"),
+        &object,
+    );
     let response = client
         .post(server.http("/api/v1/risk-objects"))
         .json(&object)
@@ -625,12 +712,16 @@ async fn the_real_server_speaks_as_documented() {
         .unwrap();
     assert_eq!(response.status(), 201);
     let stored: Value = response.json().await.unwrap();
-    assert_valid(&component(&doc, "RiskObjectDocument"), &stored);
+    assert_valid(
+        &mut checker,
+        &component(&doc, "RiskObjectDocument"),
+        &stored,
+    );
     assert!(stored["id"].is_string(), "{stored}");
 
     // The base density's body, documented as RiskBaseDocument.
     let base = json!({"value": 0.2});
-    assert_valid(&component(&doc, "RiskBaseDocument"), &base);
+    assert_valid(&mut checker, &component(&doc, "RiskBaseDocument"), &base);
     let response = client
         .put(server.http("/api/v1/mission/risk/base"))
         .json(&base)
@@ -639,13 +730,13 @@ async fn the_real_server_speaks_as_documented() {
         .unwrap();
     assert_eq!(response.status(), 200);
     let mission: Value = response.json().await.unwrap();
-    assert_valid(&component(&doc, "MissionDocument"), &mission);
+    assert_valid(&mut checker, &component(&doc, "MissionDocument"), &mission);
 
     // Geo-referenced writes: the origin, a GeoJSON region and an object at
     // lat, lon, each body valid against its operation's request schema and
     // each answer against its response's.
     let origin = json!({"lat": -35.363261, "lon": 149.16523});
-    assert_valid(&component(&doc, "OriginDocument"), &origin);
+    assert_valid(&mut checker, &component(&doc, "OriginDocument"), &origin);
     let response = client
         .put(server.http("/api/v1/mission/origin"))
         .json(&origin)
@@ -654,7 +745,7 @@ async fn the_real_server_speaks_as_documented() {
         .unwrap();
     assert_eq!(response.status(), 200);
     let mission: Value = response.json().await.unwrap();
-    assert_valid(&component(&doc, "MissionDocument"), &mission);
+    assert_valid(&mut checker, &component(&doc, "MissionDocument"), &mission);
     assert_eq!(mission["origin"], origin);
     let ring = json!([
         [149.16523, -35.363261],
@@ -665,7 +756,7 @@ async fn the_real_server_speaks_as_documented() {
     ]);
     let region = json!({"type": "Feature", "properties": {"name": "bay"},
                         "geometry": {"type": "Polygon", "coordinates": [ring]}});
-    assert_valid(&component(&doc, "RegionInput"), &region);
+    assert_valid(&mut checker, &component(&doc, "RegionInput"), &region);
     let response = client
         .put(server.http("/api/v1/mission/region"))
         .json(&region)
@@ -674,9 +765,9 @@ async fn the_real_server_speaks_as_documented() {
         .unwrap();
     assert_eq!(response.status(), 200);
     let mission: Value = response.json().await.unwrap();
-    assert_valid(&component(&doc, "MissionDocument"), &mission);
+    assert_valid(&mut checker, &component(&doc, "MissionDocument"), &mission);
     let object = json!({"lat": -35.3628, "lon": 149.1658, "alpha": 3, "sigma": 5});
-    assert_valid(&component(&doc, "RiskObjectInput"), &object);
+    assert_valid(&mut checker, &component(&doc, "RiskObjectInput"), &object);
     let response = client
         .post(server.http("/api/v1/risk-objects"))
         .json(&object)
@@ -685,7 +776,11 @@ async fn the_real_server_speaks_as_documented() {
         .unwrap();
     assert_eq!(response.status(), 201);
     let stored: Value = response.json().await.unwrap();
-    assert_valid(&component(&doc, "RiskObjectDocument"), &stored);
+    assert_valid(
+        &mut checker,
+        &component(&doc, "RiskObjectDocument"),
+        &stored,
+    );
     let response = reqwest::get(server.http("/api/v1/coverage.geojson"))
         .await
         .unwrap();
@@ -697,388 +792,4 @@ async fn the_real_server_speaks_as_documented() {
 
     drop(sink);
     server.stop().await;
-}
-
-// The peer wire (docs/peer.md): its JSON Schema, generated here
-// from the protocol types, and the worked beacon example, made by the real
-// encoder.
-
-/// `api/peer-wire.schema.json`: the three documents of the peer wire, each
-/// titled with its key expression.
-fn peer_wire_schema() -> String {
-    let mut generator = SchemaSettings::draft2020_12().into_generator();
-    let beacon = generator.subschema_for::<BeaconDocument>();
-    let mission = generator.subschema_for::<PeerMissionDocument>();
-    let status = generator.subschema_for::<PeerStatusDocument>();
-    let mut defs = generator.take_definitions(true);
-    let keyed = [
-        (
-            "BeaconDocument",
-            "seacover/<fleet>/beacon/<id>",
-            format!(
-                "Put by vessel <id> 5 times a second of its mission time, express and dropped \
-                 on congestion. Payload: this map in CBOR (RFC 8949), at most {} bytes; \
-                 validated here in its JSON form.",
-                wire::MAX_BEACON
-            ),
-        ),
-        (
-            "PeerMissionDocument",
-            "seacover/<fleet>/mission",
-            format!(
-                "Put by the member that changes the mission (a coordinator with `serve --peer`) \
-                 and the reply of every member to a query on the key. Payload: this document \
-                 in JSON, at most {} bytes.",
-                wire::MAX_MISSION
-            ),
-        ),
-        (
-            "PeerStatusDocument",
-            "seacover/<fleet>/status/<id>",
-            "The reply of vessel <id>'s node to a query on the key (never put). Payload: \
-             this document in JSON."
-                .to_string(),
-        ),
-    ];
-    for (name, key, lead) in keyed {
-        let def = defs
-            .get_mut(name)
-            .unwrap_or_else(|| panic!("no definition {name}"));
-        let own = def["description"].as_str().unwrap_or_default().to_string();
-        def["title"] = json!(format!("`{key}`"));
-        def["description"] = json!(format!("Key expression `{key}`. {lead} {own}"));
-    }
-    for def in defs.values_mut() {
-        bound_unsigned(def);
-    }
-    let (_, decoded) = beacon_example();
-    defs["BeaconDocument"]["examples"] = json!([decoded]);
-    let description = format!(
-        "What the members of a peer fleet (docs/peer.md) put on Eclipse Zenoh; \
-         `<fleet>` is the fleet's name and `<id>` a vessel's id (each `[A-Za-z0-9_.-]{{1,64}}`). \
-         `seacover/<fleet>/beacon/<id>`: a `BeaconDocument` in CBOR. \
-         `seacover/<fleet>/alive/<id>`: a liveliness token (no payload), held while vessel <id> \
-         runs. `seacover/<fleet>/mission`: a `PeerMissionDocument` in JSON. \
-         `seacover/<fleet>/status/<id>`: a `PeerStatusDocument` in JSON, answered to queries. \
-         The key expression says which document a payload is; a beacon's CBOR map is \
-         validated in its JSON form (text, unsigned integers, floats and booleans map one to \
-         one). Shapes only: a member refuses, and counts by reason, a beacon over {} bytes, \
-         with a non-finite value, a position beyond {} m of the origin, a speed over {} m/s, a \
-         yaw rate over {} rad/s, an actuator the engine refuses or an id other than its key's, \
-         and a mission document that fails the mission's validation or is not newer than the \
-         one it holds.",
-        wire::MAX_BEACON,
-        wire::MAX_POSITION,
-        wire::MAX_SPEED,
-        wire::MAX_YAW_RATE,
-    );
-    let schema = json!({
-        "$schema": "https://json-schema.org/draft/2020-12/schema",
-        "title": "seacover peer wire",
-        "description": description,
-        "oneOf": [beacon, mission, status],
-        "$defs": defs,
-    });
-    let mut text = serde_json::to_string_pretty(&schema).expect("the schema serializes");
-    text.push('\n');
-    text
-}
-
-/// schemars bounds an unsigned integer's schema below, and above only up
-/// to 16 bits: this adds the upper bound that serde enforces to the wider
-/// ones (`rev` is a u32: 2^32 is not a revision).
-fn bound_unsigned(schema: &mut Value) {
-    match schema {
-        Value::Object(map) => {
-            let top = match map.get("format").and_then(Value::as_str) {
-                Some("uint32") => Some(u64::from(u32::MAX)),
-                Some("uint64" | "uint") => Some(u64::MAX),
-                _ => None,
-            };
-            if let Some(top) = top
-                && !map.contains_key("maximum")
-            {
-                map.insert("maximum".into(), json!(top));
-            }
-            map.values_mut().for_each(bound_unsigned);
-        }
-        Value::Array(items) => items.iter_mut().for_each(bound_unsigned),
-        _ => {}
-    }
-}
-
-fn peer_wire_schema_value() -> Value {
-    serde_json::from_str(&peer_wire_schema()).unwrap()
-}
-
-#[test]
-fn peer_wire_schema_is_fresh() {
-    check_fresh("peer-wire.schema.json", &peer_wire_schema());
-}
-
-/// The worked example's beacon: usv-3 of the paper's fleet near its
-/// centroid, as its node fills it in.
-fn example_beacon() -> BeaconDocument {
-    let (k, beta) = wire::wire_actuator(0.5, 0.001);
-    BeaconDocument {
-        id: "usv-3".into(),
-        seq: 123,
-        t: 1_795_000_000.25,
-        x: 63.67,
-        y: 24.1,
-        psi: 2.9884,
-        u: 0.4,
-        v: -0.01,
-        r: 0.02,
-        k,
-        beta,
-        rev: 2,
-        controlled: true,
-    }
-}
-
-/// The example's bytes, by the real encoder, and what the real decoder
-/// reads back from them.
-fn beacon_example() -> (Vec<u8>, BeaconDocument) {
-    let bytes = wire::encode(&example_beacon());
-    let decoded = wire::decode(&bytes, "usv-3").expect("the example decodes");
-    (bytes, decoded)
-}
-
-/// The first CBOR data item of `bytes`, of the kinds a beacon holds: its
-/// length (for a map, its header's) and its kind.
-fn cbor_item(bytes: &[u8]) -> (usize, String) {
-    let (major, info) = (bytes[0] >> 5, bytes[0] & 0x1f);
-    let width = match info {
-        0..=23 => 0,
-        24 => 1,
-        25 => 2,
-        26 => 4,
-        27 => 8,
-        _ => panic!("no indefinite lengths in a beacon"),
-    };
-    let argument = if width == 0 {
-        u64::from(info)
-    } else {
-        bytes[1..=width]
-            .iter()
-            .fold(0u64, |a, b| (a << 8) | u64::from(*b))
-    };
-    match (major, info) {
-        (0, _) => (1 + width, "unsigned integer".into()),
-        (3, _) => (
-            1 + width + argument as usize,
-            format!("text, {argument} bytes"),
-        ),
-        (5, _) => (1 + width, format!("map of {argument} pairs")),
-        (7, 20) => (1, "false".into()),
-        (7, 21) => (1, "true".into()),
-        (7, 25) => (3, "float16".into()),
-        (7, 26) => (5, "float32".into()),
-        (7, 27) => (9, "float64".into()),
-        _ => panic!("a beacon holds no CBOR item {:02x}", bytes[0]),
-    }
-}
-
-fn hex(bytes: &[u8]) -> String {
-    bytes
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect::<Vec<_>>()
-        .join(" ")
-}
-
-/// The generated part of docs/peer.md: the example beacon's bytes, each
-/// field's share of them, and the decoded map.
-fn beacon_example_markdown() -> String {
-    let given = serde_json::to_value(example_beacon()).unwrap();
-    let (bytes, decoded) = beacon_example();
-    let back = serde_json::to_value(&decoded).unwrap();
-    let mut out = String::new();
-    out.push_str(&format!(
-        "`wire::encode` of `usv-3` at (63.67, 24.1) m, heading 2.9884 rad, 0.4 m/s ahead, \
-         on mission revision 2, beacon number 1234, sent at t = 1795000000.25 \
-         (2026-11-18T11:06:40.25Z): {} bytes.\n\n```text\n",
-        bytes.len()
-    ));
-    for (i, line) in bytes.chunks(16).enumerate() {
-        out.push_str(&format!("{:04x}  {}\n", i * 16, hex(line)));
-    }
-    out.push_str(
-        "```\n\n| key | key bytes | value bytes | value as CBOR | decoded | given to the encoder |\n\
-         | --- | --- | --- | --- | ---: | ---: |\n",
-    );
-    let (header, kind) = cbor_item(&bytes);
-    out.push_str(&format!(
-        "| | `{}` | | {kind} | | |\n",
-        hex(&bytes[..header])
-    ));
-    let mut at = header;
-    while at < bytes.len() {
-        let (key_len, _) = cbor_item(&bytes[at..]);
-        let key_bytes = &bytes[at..at + key_len];
-        let key = std::str::from_utf8(&key_bytes[1..]).unwrap();
-        at += key_len;
-        let (value_len, kind) = cbor_item(&bytes[at..]);
-        let value_bytes = &bytes[at..at + value_len];
-        at += value_len;
-        out.push_str(&format!(
-            "| `{key}` | `{}` | `{}` | {kind} | `{}` | `{}` |\n",
-            hex(key_bytes),
-            hex(value_bytes),
-            back[key],
-            given[key],
-        ));
-    }
-    out.push_str(&format!(
-        "\n`wire::decode` reads it back as (JSON):\n\n```json\n{}\n```\n",
-        serde_json::to_string_pretty(&decoded).unwrap()
-    ));
-    out
-}
-
-const PEER_DOC_BEGIN: &str =
-    "<!-- generated by tests/it/api_docs.rs from wire::encode; SEACOVER_BLESS=1 refreshes -->\n";
-const PEER_DOC_END: &str = "<!-- end of the generated example -->";
-
-#[test]
-fn the_beacon_example_in_docs_peer_is_fresh() {
-    let (bytes, decoded) = beacon_example();
-    assert!(bytes.len() <= wire::MAX_BEACON, "{} bytes", bytes.len());
-    assert_eq!(decoded, wire::quantize(&example_beacon()));
-    let generated = beacon_example_markdown();
-    let file = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("docs/peer.md");
-    let text = std::fs::read_to_string(&file).unwrap();
-    let begin = text
-        .find(PEER_DOC_BEGIN)
-        .expect("docs/peer.md has the generated example's opening marker")
-        + PEER_DOC_BEGIN.len();
-    let end = begin
-        + text[begin..]
-            .find(PEER_DOC_END)
-            .expect("docs/peer.md has the generated example's closing marker");
-    if blessing() {
-        let fresh = format!("{}{generated}{}", &text[..begin], &text[end..]);
-        std::fs::write(&file, fresh).unwrap();
-        eprintln!("wrote {}", file.display());
-        return;
-    }
-    assert!(
-        text[begin..end] == generated,
-        "the beacon example in docs/peer.md is not what wire::encode makes today; refresh it \
-         with `{REFRESH}` and commit the result. Generated:\n{generated}"
-    );
-}
-
-/// The real documents of the peer wire, each valid against the schema and
-/// against its own key's definition only.
-#[test]
-fn the_peer_wire_schema_accepts_the_real_documents() {
-    let schema = peer_wire_schema_value();
-    jsonschema::meta::validate(&schema).expect("the peer wire schema is a JSON Schema");
-    let only = |name: &str| {
-        json!({
-            "$schema": "https://json-schema.org/draft/2020-12/schema",
-            "$ref": format!("#/$defs/{name}"),
-            "$defs": schema["$defs"],
-        })
-    };
-    let (bytes, decoded) = beacon_example();
-    // The CBOR map in its JSON form, as a generic CBOR reader sees it.
-    let value: ciborium::Value = ciborium::from_reader(bytes.as_slice()).unwrap();
-    let generic: Value = value.deserialized().unwrap();
-    assert_eq!(generic, serde_json::to_value(&decoded).unwrap());
-    let mission = serde_json::to_value(PeerMissionDocument {
-        revision: 7,
-        mission: seacover::mission::Mission::paper().document(),
-        by: Some("seacover serve --peer on shore-1: PUT /api/v1/mission/region".into()),
-        at: Some("2026-11-27T22:00:00Z".into()),
-    })
-    .unwrap();
-    let status = |revision| {
-        serde_json::to_value(PeerStatusDocument {
-            id: "usv-1".into(),
-            revision,
-            controlled: revision.is_some(),
-            neighbours: 2,
-            partition_since: revision.map(|_| 1_795_000_000.25),
-            heard: [("usv-2".to_string(), 0.13), ("usv-9".to_string(), 4.2)].into(),
-            refused: [("oversized".to_string(), 1), ("jump".to_string(), 2)].into(),
-            quarantined: [(
-                "usv-9".to_string(),
-                "moved at 31.2 m/s since its last believed pose, beyond the hull's limit"
-                    .to_string(),
-            )]
-            .into(),
-            received: 1523,
-            split: revision.map(|_| vec!["usv-5".to_string(), "usv-6".to_string()]),
-            split_water: revision.map(|_| seacover::protocol::peer::SplitWater::Own),
-            alone: revision.is_none(),
-        })
-        .unwrap()
-    };
-    let documents = [
-        ("BeaconDocument", generic),
-        ("PeerMissionDocument", mission),
-        ("PeerStatusDocument", status(Some(7))),
-        ("PeerStatusDocument", status(None)),
-    ];
-    for (name, document) in &documents {
-        assert_valid(&schema, document);
-        for other in [
-            "BeaconDocument",
-            "PeerMissionDocument",
-            "PeerStatusDocument",
-        ] {
-            let errors = errors(&only(other), document);
-            assert_eq!(
-                errors.is_empty(),
-                other == *name,
-                "{name} as {other}: {errors:?}"
-            );
-        }
-    }
-}
-
-/// Beacons: what serde rejects, the schema rejects, and the other way round.
-#[test]
-fn the_peer_wire_schema_agrees_with_serde_on_beacons() {
-    let schema = peer_wire_schema_value();
-    let beacon = serde_json::to_value(beacon_example().1).unwrap();
-    let with = |key: &str, value: Value| {
-        let mut b = beacon.clone();
-        b[key] = value;
-        b
-    };
-    let without = |key: &str| {
-        let mut b = beacon.clone();
-        b.as_object_mut().unwrap().remove(key);
-        b
-    };
-    let cases = [
-        beacon.clone(),
-        with("t", json!(1_795_000_000)),
-        with("seq", json!(65_535)),
-        with("seq", json!(65_536)),
-        with("seq", json!(-1)),
-        with("rev", json!(4_294_967_295u64)),
-        with("rev", json!(4_294_967_296u64)),
-        with("rev", json!(2.5)),
-        with("rev", json!("2")),
-        with("controlled", json!(1)),
-        with("x", json!(null)),
-        with("extra", json!(true)),
-        without("controlled"),
-        without("beta"),
-    ];
-    for case in cases {
-        let serde_accepts = serde_json::from_value::<BeaconDocument>(case.clone()).is_ok();
-        let schema_errors = errors(&schema, &case);
-        assert_eq!(
-            schema_errors.is_empty(),
-            serde_accepts,
-            "{case}: serde {} it, the schema says {schema_errors:?}",
-            if serde_accepts { "accepts" } else { "rejects" },
-        );
-    }
 }

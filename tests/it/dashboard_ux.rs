@@ -22,6 +22,7 @@ use crate::common::browser::{
     browser_or_skip, console_errors, drag, open_browser, screenshot, start_driver, until,
 };
 use crate::common::inprocess::Server;
+use crate::common::schema::Validator;
 use fantoccini::{Client, Locator};
 use seacover::agent::{AgentConfig, paper_vessels, run_fleet};
 use seacover::control::model::VesselParams;
@@ -580,8 +581,12 @@ async fn the_coverage_history_is_bounded_and_thinned() {
         "$ref": "#/components/schemas/CoverageHistoryDocument",
         "components": {"schemas": doc["components"]["schemas"]},
     });
-    let validator = jsonschema::draft202012::new(&schema).unwrap();
-    assert!(validator.is_valid(&body), "{body}");
+    if let Some(mut checker) =
+        Validator::start("dashboard_ux::the_coverage_history_is_bounded_and_thinned")
+    {
+        let errors = checker.errors(&schema, &body);
+        assert!(errors.is_empty(), "{body}: {errors:?}");
+    }
     assert_eq!(
         doc["paths"]["/api/v1/coverage/history"]["get"]["responses"]["200"]["content"]["application/json"]
             ["schema"]["$ref"],

@@ -19,5 +19,6 @@ pub(crate) mod netns;
 pub(crate) mod paper;
 pub(crate) mod peer;
 pub(crate) mod process;
+pub(crate) mod schema;
 pub(crate) mod server;
 pub(crate) mod sitl;
