@@ -90,6 +90,32 @@ fn assert_valid(checker: &mut Validator, schema: &Value, instance: &Value) {
     assert!(errors.is_empty(), "{instance} was rejected: {errors:#?}");
 }
 
+/// Asserts that `schema` accepts each of `cases` exactly when serde does
+/// (`serde_accepts`), as an independent checker says.
+#[track_caller]
+fn assert_agree(
+    checker: &mut Validator,
+    schema: &Value,
+    cases: impl IntoIterator<Item = Value>,
+    serde_accepts: impl Fn(&Value) -> bool,
+) {
+    for case in cases {
+        let accepts = serde_accepts(&case);
+        let errors = checker.errors(schema, &case);
+        assert_eq!(
+            errors.is_empty(),
+            accepts,
+            "{case}: serde {} it, the schema says {errors:?}",
+            if accepts { "accepts" } else { "rejects" },
+        );
+    }
+}
+
+/// Whether serde reads `case` as a `T`.
+fn reads<T: serde::de::DeserializeOwned>(case: &Value) -> bool {
+    serde_json::from_value::<T>(case.clone()).is_ok()
+}
+
 /// Every `$ref` in `schema` points at a part of it that exists: the
 /// documents stand alone.
 fn assert_refs_resolve(name: &str, schema: &Value, node: &Value) {
@@ -342,17 +368,9 @@ fn the_link_schema_agrees_with_serde_on_edge_cases() {
         json!("hello"),
         json!([{"type": "hello", "vessel": "a", "protocol": 1}]),
     ];
-    for case in cases {
-        let serde_accepts = serde_json::from_value::<VesselMessage>(case.clone()).is_ok()
-            || serde_json::from_value::<CoordinatorMessage>(case.clone()).is_ok();
-        let schema_errors = checker.errors(&schema, &case);
-        assert_eq!(
-            schema_errors.is_empty(),
-            serde_accepts,
-            "{case}: serde {} it, the schema says {schema_errors:?}",
-            if serde_accepts { "accepts" } else { "rejects" },
-        );
-    }
+    assert_agree(&mut checker, &schema, cases, |case| {
+        reads::<VesselMessage>(case) || reads::<CoordinatorMessage>(case)
+    });
 }
 
 /// A curved cell's edges: the schema accepts exactly what serde accepts.
@@ -374,14 +392,7 @@ fn the_edge_schema_agrees_with_serde() {
         json!({"from": [0, 0], "to": [1, 2]}),
         json!({"kind": "segment", "from": [0, 0], "to": "here"}),
     ];
-    for case in cases {
-        let serde_accepts = serde_json::from_value::<EdgeDocument>(case.clone()).is_ok();
-        assert_eq!(
-            checker.errors(&schema, &case).is_empty(),
-            serde_accepts,
-            "{case}"
-        );
-    }
+    assert_agree(&mut checker, &schema, cases, reads::<EdgeDocument>);
 }
 
 /// The request bodies' schemas in the OpenAPI document accept exactly what
@@ -433,14 +444,7 @@ fn the_openapi_request_schemas_agree_with_serde() {
         json!({"vessels": [{"id": "a", "lat": "1", "lon": 2}]}),
     ];
     let schema = component(&doc, "ScenarioDocument");
-    for case in scenarios {
-        let serde_accepts = serde_json::from_value::<ScenarioDocument>(case.clone()).is_ok();
-        assert_eq!(
-            checker.errors(&schema, &case).is_empty(),
-            serde_accepts,
-            "{case}"
-        );
-    }
+    assert_agree(&mut checker, &schema, scenarios, reads::<ScenarioDocument>);
     let objects = [
         json!({"x": 1, "y": 2, "alpha": 3, "sigma": 4}),
         json!({"id": "o", "x": 1, "y": 2, "alpha": 3, "sigma": 4}),
@@ -449,14 +453,7 @@ fn the_openapi_request_schemas_agree_with_serde() {
         json!({"x": "1", "y": 2, "alpha": 3, "sigma": 4}),
     ];
     let schema = component(&doc, "RiskObjectDocument");
-    for case in objects {
-        let serde_accepts = serde_json::from_value::<RiskObjectDocument>(case.clone()).is_ok();
-        assert_eq!(
-            checker.errors(&schema, &case).is_empty(),
-            serde_accepts,
-            "{case}"
-        );
-    }
+    assert_agree(&mut checker, &schema, objects, reads::<RiskObjectDocument>);
     let regions = [
         json!({"polygon": square}),
         json!({"polygon": square, "holes": []}),
@@ -464,14 +461,12 @@ fn the_openapi_request_schemas_agree_with_serde() {
         json!({"polygon": [[1, 2], [3]]}),
     ];
     let schema = component(&doc, "RegionDocument");
-    for case in &regions {
-        let serde_accepts = serde_json::from_value::<RegionDocument>(case.clone()).is_ok();
-        assert_eq!(
-            checker.errors(&schema, case).is_empty(),
-            serde_accepts,
-            "{case}"
-        );
-    }
+    assert_agree(
+        &mut checker,
+        &schema,
+        regions.iter().cloned(),
+        reads::<RegionDocument>,
+    );
     // What PUT /api/v1/mission/region reads: those, or GeoJSON.
     let inputs = regions.iter().cloned().chain([
         geojson.clone(),
@@ -484,14 +479,7 @@ fn the_openapi_request_schemas_agree_with_serde() {
         json!({"type": 7}),
     ]);
     let schema = component(&doc, "RegionInput");
-    for case in inputs {
-        let serde_accepts = serde_json::from_value::<RegionInput>(case.clone()).is_ok();
-        assert_eq!(
-            checker.errors(&schema, &case).is_empty(),
-            serde_accepts,
-            "{case}"
-        );
-    }
+    assert_agree(&mut checker, &schema, inputs, reads::<RegionInput>);
     // What the risk-object writes read: at x, y or at lat, lon.
     let objects = [
         json!({"x": 1, "y": 2, "alpha": 3, "sigma": 4}),
@@ -505,14 +493,7 @@ fn the_openapi_request_schemas_agree_with_serde() {
         json!([1, 2]),
     ];
     let schema = component(&doc, "RiskObjectInput");
-    for case in objects {
-        let serde_accepts = serde_json::from_value::<RiskObjectInput>(case.clone()).is_ok();
-        assert_eq!(
-            checker.errors(&schema, &case).is_empty(),
-            serde_accepts,
-            "{case}"
-        );
-    }
+    assert_agree(&mut checker, &schema, objects, reads::<RiskObjectInput>);
 }
 
 async fn start() -> Server {

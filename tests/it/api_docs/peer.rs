@@ -8,7 +8,9 @@ use seacover::agent::peer::wire;
 use seacover::protocol::peer::{BeaconDocument, PeerMissionDocument, PeerStatusDocument};
 use serde_json::{Value, json};
 
-use super::{REFRESH, assert_refs_resolve, assert_valid, blessing, check_fresh};
+use super::{
+    REFRESH, assert_agree, assert_refs_resolve, assert_valid, blessing, check_fresh, reads,
+};
 use crate::common::schema::Validator;
 
 /// `api/peer-wire.schema.json`: the three documents of the peer wire, each
@@ -390,14 +392,5 @@ fn the_peer_wire_schema_agrees_with_serde_on_beacons() {
         without("controlled"),
         without("beta"),
     ];
-    for case in cases {
-        let serde_accepts = serde_json::from_value::<BeaconDocument>(case.clone()).is_ok();
-        let schema_errors = checker.errors(&schema, &case);
-        assert_eq!(
-            schema_errors.is_empty(),
-            serde_accepts,
-            "{case}: serde {} it, the schema says {schema_errors:?}",
-            if serde_accepts { "accepts" } else { "rejects" },
-        );
-    }
+    assert_agree(&mut checker, &schema, cases, reads::<BeaconDocument>);
 }
