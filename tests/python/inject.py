@@ -32,10 +32,11 @@ import sys
 import threading
 import time
 
+# First: it sets Zenoh's runtime up before zenoh is imported.
+from peer_session import add_session_args, make_config  # noqa: I001
+
 import cbor2
 import zenoh
-
-from peer_session import add_session_args, make_config
 
 
 def parse_args(argv):

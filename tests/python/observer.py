@@ -43,31 +43,16 @@ either way it closes the session and the file cleanly and exits 0.
 import argparse
 import json
 import math
-import os
 import signal
 import sys
 import threading
 import time
 
-# The observer is the tests' instrument: it must keep hearing the peers it can
-# reach when others vanish. Zenoh (1.10.2) sets SO_LINGER 10 s on its TCP
-# links and closes a link whose lease expired on one of its runtimes' few
-# workers (RX: 2, TX and Net: 1 by default): with unsent data queued for a
-# peer behind a partition, close(2) blocks that worker for up to 10 s, and
-# two such links (any partition) block every RX worker, so the whole session
-# stops receiving for 10 s (measured: strace shows two threads in close() for
-# > 8 s, and no sample delivered meanwhile; with more RX workers only, TX
-# and Net still stall some links for seconds). More workers than links that
-# can close at once avoid that; ZENOH_RUNTIME, if set, wins.
-os.environ.setdefault(
-    "ZENOH_RUNTIME",
-    "(rx: (worker_threads: 16), tx: (worker_threads: 16), net: (worker_threads: 16))",
-)
+# First: it sets Zenoh's runtime up before zenoh is imported.
+from peer_session import add_session_args, make_config  # noqa: I001
 
-import cbor2  # noqa: E402 (after the runtime's environment)
-import zenoh  # noqa: E402
-
-from peer_session import add_session_args, make_config  # noqa: E402
+import cbor2
+import zenoh
 
 
 def parse_args(argv):

@@ -4,8 +4,25 @@ and the session configuration they make. Peer mode always, as seacover's
 members."""
 
 import json
+import os
 
-import zenoh
+# Every tool here must keep hearing the peers it can reach when others vanish
+# (the observer is the tests' instrument; a stand-in vessel's silence fails a
+# test as surely). Zenoh (1.10.2) sets SO_LINGER 10 s on its TCP
+# links and closes a link whose lease expired on one of its runtimes' few
+# workers (RX: 2, TX and Net: 1 by default): with unsent data queued for a
+# peer behind a partition, close(2) blocks that worker for up to 10 s, and
+# two such links (any partition) block every RX worker, so the whole session
+# stops receiving for 10 s (measured: strace shows two threads in close() for
+# > 8 s, and no sample delivered meanwhile; with more RX workers only, TX
+# and Net still stall some links for seconds). More workers than links that
+# can close at once avoid that; ZENOH_RUNTIME, if set, wins.
+os.environ.setdefault(
+    "ZENOH_RUNTIME",
+    "(rx: (worker_threads: 16), tx: (worker_threads: 16), net: (worker_threads: 16))",
+)
+
+import zenoh  # noqa: E402 (after the runtime's environment)
 
 
 def add_session_args(p):
