@@ -16,7 +16,7 @@ use std::time::Duration;
 use serde_json::{Value, json};
 
 use crate::common::netns::{Medium, cleanup_stale, root_or_skip};
-use crate::common::peer::{INJECT, Observer, now, python_or_skip, start_ready};
+use crate::common::peer::{INJECT, Observer, now, python_or_skip, start_ready, wait_explained};
 use crate::common::process::KillOnDrop;
 
 /// Beacons per second from each stand-in vessel.
@@ -60,40 +60,40 @@ fn heard(records: &[Value], i: usize, from: f64, to: f64) -> Vec<Value> {
 /// what the observer saw of their liveliness (a session that closed and
 /// opened again shows as `gone` and `alive`).
 fn until_both_heard(observer: &Observer, since: f64, what: &str) -> f64 {
-    let deadline = std::time::Instant::now() + Duration::from_secs(30);
-    loop {
+    let both = || {
         let records = observer.records();
-        if (1..=2).all(|i| !heard(&records, i, since, f64::MAX).is_empty()) {
-            return now() - since;
-        }
-        if std::time::Instant::now() >= deadline {
-            let last: Vec<Option<f64>> = (1..=2)
-                .map(|i| {
-                    heard(&records, i, 0.0, f64::MAX)
-                        .last()
-                        .map(|r| r["recv"].as_f64().unwrap() - since)
-                })
-                .collect();
-            let liveliness: Vec<String> = records
-                .iter()
-                .filter(|r| r["kind"] == "alive" || r["kind"] == "gone")
-                .map(|r| {
-                    format!(
-                        "{} {} at {:+.1} s",
-                        r["kind"],
-                        r["key"],
-                        r["recv"].as_f64().unwrap() - since
-                    )
-                })
-                .collect();
-            panic!(
-                "after 30 s: {what}; last heard (s from the start of the wait): usv-1 {:?}, usv-2 {:?}; \
-                 liveliness: {liveliness:?}",
-                last[0], last[1]
-            );
-        }
-        sleep(Duration::from_millis(100));
-    }
+        (1..=2)
+            .all(|i| !heard(&records, i, since, f64::MAX).is_empty())
+            .then(|| now() - since)
+    };
+    let explain = || {
+        let records = observer.records();
+        let last: Vec<Option<f64>> = (1..=2)
+            .map(|i| {
+                heard(&records, i, 0.0, f64::MAX)
+                    .last()
+                    .map(|r| r["recv"].as_f64().unwrap() - since)
+            })
+            .collect();
+        let liveliness: Vec<String> = records
+            .iter()
+            .filter(|r| r["kind"] == "alive" || r["kind"] == "gone")
+            .map(|r| {
+                format!(
+                    "{} {} at {:+.1} s",
+                    r["kind"],
+                    r["key"],
+                    r["recv"].as_f64().unwrap() - since
+                )
+            })
+            .collect();
+        format!(
+            "; last heard (s from the start of the wait): usv-1 {:?}, usv-2 {:?}; liveliness: \
+             {liveliness:?}",
+            last[0], last[1]
+        )
+    };
+    wait_explained(30.0, what, both, explain)
 }
 
 /// A beacon older than this on arrival is late: with TCP between the peers

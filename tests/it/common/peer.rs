@@ -45,13 +45,25 @@ pub(crate) fn now() -> f64 {
 
 /// Polls `check` every 100 ms until it gives a value; panics after `secs`
 /// seconds naming `what`.
-pub(crate) fn wait_for<T>(secs: f64, what: &str, mut check: impl FnMut() -> Option<T>) -> T {
+pub(crate) fn wait_for<T>(secs: f64, what: &str, check: impl FnMut() -> Option<T>) -> T {
+    wait_explained(secs, what, check, String::new)
+}
+
+/// [`wait_for`], whose panic adds what `explain` says of the state then.
+pub(crate) fn wait_explained<T>(
+    secs: f64,
+    what: &str,
+    mut check: impl FnMut() -> Option<T>,
+    explain: impl FnOnce() -> String,
+) -> T {
     let deadline = Instant::now() + Duration::from_secs_f64(secs);
     loop {
         if let Some(v) = check() {
             return v;
         }
-        assert!(Instant::now() < deadline, "after {secs} s: {what}");
+        if Instant::now() >= deadline {
+            panic!("after {secs} s: {what}{}", explain());
+        }
         std::thread::sleep(Duration::from_millis(100));
     }
 }
