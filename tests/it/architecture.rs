@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 /// The layers, bottom up: a module may refer to its own layer's modules and
 /// to lower layers, never to a higher one (README, "Architecture").
 const LAYERS: &[(&str, &[&str])] = &[
-    ("core", &["geometry", "coverage", "control"]),
+    ("core", &["geometry", "coverage", "control", "learning"]),
     ("protocol", &["protocol"]),
     ("mission", &["mission"]),
     ("recorder", &["recorder", "chain"]),

@@ -10,6 +10,8 @@
 //! - [`control`]: the 3-DOF vessel model, disturbances, the finite-time
 //!   disturbance observer, the robust controller, guidance, the on-board
 //!   reference governor and the safety layer.
+//! - [`learning`]: the risk density learned from point samples, as a base
+//!   plus non-negative Gaussians with an uncertainty.
 //!
 //! The `evaluate` example builds a scenario with this API alone and prints
 //! its partition, H and centroids:
@@ -30,3 +32,4 @@
 pub mod control;
 pub mod coverage;
 pub mod geometry;
+pub mod learning;
