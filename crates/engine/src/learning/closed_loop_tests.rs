@@ -65,6 +65,18 @@ impl Paper {
         e.cells.iter().map(|c| c.centroid).collect()
     }
 
+    fn range(&self) -> f64 {
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for j in 0..=100 {
+            for i in 0..=100 {
+                let v = self.truth.value(p(f64::from(i), f64::from(j)));
+                lo = lo.min(v);
+                hi = hi.max(v);
+            }
+        }
+        hi - lo
+    }
+
     /// The truth's H with the vessels at `at`.
     fn h(&self, at: &[Point]) -> f64 {
         evaluate(
@@ -102,13 +114,25 @@ impl Paper {
     /// samples, lattice spacing `spacing`, optimism `kappa`, noise seed
     /// `seed`.
     fn learning(&self, spacing: f64, kappa: f64, seed: u64, secs: usize) -> f64 {
+        self.learning_with(spacing, kappa, seed, secs, 0.05, 0.0)
+    }
+
+    fn learning_with(
+        &self,
+        spacing: f64,
+        kappa: f64,
+        seed: u64,
+        secs: usize,
+        noise: f64,
+        outliers: f64,
+    ) -> f64 {
         let h_star = self.h(&self.rest(&self.truth));
         let flat = RiskField::new(0.1, vec![]).unwrap();
         let lattice = Lattice::over(p(0.0, 0.0), p(100.0, 100.0), spacing).unwrap();
         let mut learner = Learner::new(lattice, flat.clone(), Params::new(1.0, 1.0, 5.0).unwrap());
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        // 5 % of the truth's range.
-        let sd = 0.05 * 13.0;
+        let range = self.range();
+        let sd = noise * range;
         let mut at = self.starts.clone();
         let mut belief = flat;
         for t in 0..secs {
@@ -116,7 +140,11 @@ impl Paper {
                 // Box–Muller.
                 let (u1, u2): (f64, f64) = (rng.random::<f64>().max(1e-300), rng.random());
                 let noise = (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos();
-                learner.add(Sample::new(*q, self.truth.value(*q) + sd * noise, sd).unwrap());
+                let mut y = self.truth.value(*q) + sd * noise;
+                if rng.random::<f64>() < outliers {
+                    y = rng.random::<f64>() * 5.0 * range;
+                }
+                learner.add(Sample::new(*q, y, sd).unwrap());
             }
             if t % 5 == 0 {
                 belief = learner.fit().density(kappa);
@@ -141,5 +169,62 @@ fn learning_closes_the_gap_on_the_paper_map() {
         let learned = paper.learning(10.0, 0.0, seed, 300);
         eprintln!("seed {seed}: {learned:.4} of H★ at 300 s");
         assert!(learned >= 0.995, "seed {seed}: {learned:.4} of H★");
+    }
+}
+
+/// Truths the lattice does not contain (spreads of 5–6 m and 14–20 m
+/// against its 10 m, a plume of eight small objects along a line, a field
+/// that is zero over the western half): learning reaches at least 96.5 %
+/// of H★ within 300 s at 5 % noise, and more than covering the flat map.
+/// With 20 % noise and with 2 % gross outliers (a value anywhere up to
+/// five times the range) the figures are printed (docs/learning.md).
+#[test]
+fn learning_beats_the_flat_map_on_truths_the_lattice_lacks() {
+    let o = |x, y, alpha, sigma| RiskObject {
+        center: p(x, y),
+        alpha,
+        sigma,
+    };
+    let plume = (0..8)
+        .map(|k| {
+            o(
+                20.0 + 8.0 * f64::from(k),
+                30.0 + 6.0 * f64::from(k),
+                6.0,
+                5.0,
+            )
+        })
+        .collect();
+    let narrow = vec![o(30.0, 70.0, 12.0, 5.0), o(75.0, 30.0, 9.0, 6.0)];
+    let wide = vec![o(35.0, 60.0, 6.0, 20.0), o(80.0, 20.0, 8.0, 14.0)];
+    let east = vec![
+        o(75.0, 30.0, 10.0, 8.0),
+        o(85.0, 75.0, 12.0, 10.0),
+        o(65.0, 55.0, 6.0, 7.0),
+    ];
+    let truths = [
+        ("narrow", RiskField::new(0.1, narrow).unwrap()),
+        ("wide", RiskField::new(0.1, wide).unwrap()),
+        ("plume", RiskField::new(0.05, plume).unwrap()),
+        ("half", RiskField::new(0.0, east).unwrap()),
+    ];
+    let flat = RiskField::new(0.1, vec![]).unwrap();
+    for (name, truth) in truths {
+        let paper = Paper { truth, ..paper() };
+        let h_star = paper.h(&paper.rest(&paper.truth));
+        let blind = paper.h(&paper.rest(&flat)) / h_star;
+        let mut line = format!("{name}: no learning {blind:.4}");
+        for (noise, outliers) in [(0.05, 0.0), (0.2, 0.0), (0.05, 0.02)] {
+            let got: Vec<f64> = (1..=2)
+                .map(|seed| paper.learning_with(10.0, 0.0, seed, 300, noise, outliers))
+                .collect();
+            line += &format!("; noise {noise}, outliers {outliers}: {got:.4?}");
+            if outliers == 0.0 && noise == 0.05 {
+                for g in &got {
+                    assert!(*g >= 0.965 && *g > blind, "{name}: {g:.4} of H★");
+                }
+            }
+        }
+        eprintln!("{line}");
     }
 }
