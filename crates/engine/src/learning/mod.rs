@@ -33,8 +33,6 @@
 //! a fit is O(N · 80² + K³) for N samples and K Gaussians (K = 441 on the
 //! paper's 100 m square at h = 5 m).
 
-#[cfg(test)]
-mod closed_loop_tests;
 mod fit;
 mod lattice;
 #[cfg(test)]
