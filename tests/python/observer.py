@@ -31,6 +31,11 @@ one JSON object per line, flushed per line, to ``--out FILE``:
   reply, or ``{"kind": "status_error", "from", "sent", "recv", "error"}`` for
   a reply that is an error or not a JSON object.
 
+- with ``--peers-every S``, every S seconds ``{"kind": "peers", "zids":
+  [<Zenoh ids of the sessions this one is linked to directly>], "recv"}``:
+  a peer heard only through another (Zenoh's failover brokering) is not
+  among them.
+
 Each kind of periodic query runs in a thread of its own: one waiting out its
 timeout (a peer that went silent) never delays the other.
 
@@ -65,6 +70,8 @@ def parse_args(argv):
                    help="query seacover/<fleet>/mission every S seconds")
     p.add_argument("--query-status-every", type=float, metavar="S",
                    help="query seacover/<fleet>/status/* every S seconds")
+    p.add_argument("--peers-every", type=float, metavar="S",
+                   help="record the directly linked peers every S seconds")
     return p.parse_args(argv)
 
 
@@ -277,6 +284,11 @@ def main(argv):
         timeout = max(0.1, min(args.query_status_every, 2.0))
         threads.append(periodic(args.query_status_every, timeout,
                                 lambda t: query_status(session, f"{prefix}/status/*", out, t)))
+    if args.peers_every:
+        def peers(_timeout):
+            zids = sorted(str(z) for z in session.info.peers_zid())
+            out.write({"kind": "peers", "zids": zids, "recv": time.time()})
+        threads.append(periodic(args.peers_every, 0.0, peers))
     deadline = None if args.duration is None else time.monotonic() + args.duration
     try:
         while not stop.is_set():
