@@ -26,10 +26,20 @@ use crate::common::process::KillOnDrop;
 
 const SEACOVER: &str = env!("CARGO_BIN_EXE_seacover");
 const FLEET: &str = "trust";
-/// How each bad input is sent: ten at 5 Hz, after the injector's first
-/// subscriber. The injector links to each vessel in turn (its first
-/// subscriber is enough for it to start), and every vessel must get some.
-const TEN_AT_5_HZ: [&str; 6] = ["--count", "10", "--hz", "5", "--wait-subscriber", "10"];
+/// How each bad input is sent: ten at 5 Hz, once the injector is linked
+/// to the three vessels and the observer. It links to them in turn, and
+/// waiting for its first subscriber only, CI once saw usv-2 count none of
+/// ten bad missions and usv-1 four (puts before a link go nowhere).
+const TEN_AT_5_HZ: [&str; 8] = [
+    "--count",
+    "10",
+    "--hz",
+    "5",
+    "--wait-subscriber",
+    "10",
+    "--wait-peers",
+    "4",
+];
 const PAPER: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/paper.json");
 
 /// Vessel `usv-<i+1>` in host `i`, with the credentials. Its log goes to
@@ -283,6 +293,8 @@ fn without_credentials_nothing_is_heard_and_with_them_bad_input_changes_nothing(
         "1",
         "--wait-subscriber",
         "10",
+        "--wait-peers",
+        "4",
     ];
     all.extend(c);
     inject(&medium, &python, 4, &all);

@@ -20,7 +20,9 @@ scripts/test), independently of seacover's code. Two modes:
 ``--alive ID`` also declares the liveliness token ``seacover/<fleet>/alive/ID``
 for as long as the process runs. ``--wait-subscriber S`` waits up to S
 seconds for a matching subscriber before the first put (a put before any
-peer is discovered goes nowhere). ``ready`` is printed on stdout (flushed)
+peer is discovered goes nowhere); with ``--wait-peers N`` also for direct
+links to N peers (a matching subscriber is any one of them: the others'
+puts would be lost until they are linked too). ``ready`` is printed on stdout (flushed)
 once the session is open; the process exits 0 after the last put, or on
 SIGTERM/SIGINT, closing the session.
 """
@@ -59,6 +61,8 @@ def parse_args(argv):
     p.add_argument("--alive", metavar="ID", help="declare the token seacover/<fleet>/alive/ID")
     p.add_argument("--wait-subscriber", type=float, default=0.0, metavar="S",
                    help="wait up to S seconds for a matching subscriber before the first put")
+    p.add_argument("--wait-peers", type=int, default=0, metavar="N",
+                   help="within --wait-subscriber, also wait for direct links to N peers")
     add_session_args(p)
     args = p.parse_args(argv)
     if args.mission_json is None and not args.key_suffix:
@@ -113,7 +117,10 @@ def main(argv):
     print("ready", flush=True)
     try:
         waited = time.monotonic() + args.wait_subscriber
-        while not stop.is_set() and not publisher.matching_status and time.monotonic() < waited:
+        def linked():
+            return (publisher.matching_status
+                    and len(session.info.peers_zid()) >= args.wait_peers)
+        while not stop.is_set() and not linked() and time.monotonic() < waited:
             stop.wait(0.05)
         period = 1.0 / args.hz
         next_put = time.monotonic()
