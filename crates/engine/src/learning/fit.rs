@@ -99,8 +99,15 @@ impl Learner {
         let (a, b) = self.normal_equations();
         // The prior's precision makes A positive definite.
         let chol = a.clone().cholesky().expect("A is positive definite");
+        let free = chol.solve(&b);
         let covariance = chol.inverse();
-        let mean = nonnegative(&a, &b);
+        // Most fits need no coefficient pinned: the active set's first
+        // round would only factorize A again.
+        let mean = if free.iter().all(|&t| t >= 0.0) {
+            free
+        } else {
+            nonnegative(&a, &b)
+        };
         Belief {
             lattice: self.lattice.clone(),
             prior: self.prior.clone(),
