@@ -55,10 +55,6 @@ fn heard(records: &[Value], i: usize, from: f64, to: f64) -> Vec<Value> {
         .collect()
 }
 
-/// Waits until the observer has heard both vessels since `since`; returns
-/// how long that took. A failure says when each vessel was last heard and
-/// what the observer saw of their liveliness (a session that closed and
-/// opened again shows as `gone` and `alive`).
 /// Waits until each vessel's beacons arrive at 5 a second or more (half
 /// their clean rate) over the last second; returns how long that took [s].
 fn until_steady(observer: &Observer) -> f64 {
@@ -98,6 +94,10 @@ fn until_linked_directly(observer: &Observer, n: usize) -> f64 {
     )
 }
 
+/// Waits until the observer has heard both vessels since `since`; returns
+/// how long that took. A failure says when each vessel was last heard and
+/// what the observer saw of their liveliness (a session that closed and
+/// opened again shows as `gone` and `alive`).
 fn until_both_heard(observer: &Observer, since: f64, what: &str) -> f64 {
     let both = || {
         let records = observer.records();
@@ -274,7 +274,7 @@ fn the_medium_partitions_heals_loses_cuts_and_limits() {
     // brokering), which the cut would sever too.
     // Nor while a session still stalls in TCP's retransmission back-off
     // from the loss (a beacon heard says nothing of the next): first both
-    // beacon at their clean rate again.
+    // beacon steadily again.
     let took = until_linked_directly(&observer, 2);
     let steady = until_steady(&observer);
     eprintln!(

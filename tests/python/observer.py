@@ -30,7 +30,6 @@ one JSON object per line, flushed per line, to ``--out FILE``:
   <UTC of the query>, "recv", "size", "status": {the JSON document}}`` per
   reply, or ``{"kind": "status_error", "from", "sent", "recv", "error"}`` for
   a reply that is an error or not a JSON object.
-
 - with ``--peers-every S``, every S seconds ``{"kind": "peers", "zids":
   [<Zenoh ids of the sessions this one is linked to directly>], "recv"}``:
   a peer heard only through another (Zenoh's failover brokering) is not

@@ -204,15 +204,12 @@ mod closed_loop {
     use rand::{RngExt, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 
+    use super::p;
     use crate::control::lloyd;
     use crate::coverage::{Fleet, Options, RiskField, RiskObject, Vessel, evaluate};
     use crate::geometry::Point;
     use crate::geometry::Region;
     use crate::learning::{Lattice, Learner, Params, Sample};
-
-    fn p(x: f64, y: f64) -> Point {
-        Point { x, y }
-    }
 
     /// The paper's scenario: its square, its risk map (as the hidden truth)
     /// and its eight starts.
