@@ -32,6 +32,6 @@ pub mod recorder;
 pub mod server;
 pub mod sim;
 
-pub use seacover_engine::{control, coverage, geometry};
+pub use seacover_engine::{control, coverage, geometry, learning};
 pub use seacover_mission as mission;
 pub use seacover_protocol as protocol;

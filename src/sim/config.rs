@@ -91,6 +91,8 @@ pub struct Config {
     pub hull_radius: f64,
     /// Whether to run Lloyd's baseline beside the fleet.
     pub lloyd: bool,
+    /// Sampling and learning, when the scenario has a truth.
+    pub learning: Option<super::learn::LearningConfig>,
 }
 
 /// Why a run failed.
@@ -147,7 +149,6 @@ impl Config {
     /// ticks, the paper's disturbances, snapshots at 0, T/8, T/3 and T.
     pub fn new(scenario: Scenario, headings: Vec<f64>, duration: f64) -> Config {
         Config {
-            scenario,
             headings,
             duration,
             step: 1e-3,
@@ -163,7 +164,14 @@ impl Config {
             snapshots: vec![0.0, duration / 8.0, duration / 3.0, duration],
             safety: SafetyParams::default(),
             hull_radius: DEFAULT_HULL_RADIUS,
-            lloyd: true,
+            // Lloyd's baseline covers the scenario's risk, which is only a
+            // prior when there is a truth.
+            lloyd: scenario.truth.is_none(),
+            learning: scenario
+                .truth
+                .clone()
+                .map(super::learn::LearningConfig::new),
+            scenario,
         }
     }
 

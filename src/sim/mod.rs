@@ -19,6 +19,7 @@
 
 mod config;
 pub mod figures;
+mod learn;
 pub mod monitor;
 pub mod output;
 pub mod record;
@@ -30,10 +31,13 @@ pub use config::{
     Config, DEFAULT_HULL_RADIUS, DisturbanceKind, SimError, load_scenario, load_scenario_document,
     staging_zone,
 };
-pub use run::{Measures, Run, Snapshot, Tick, VesselSample, run};
+pub use learn::{Cover, LearningConfig};
+pub use run::{Learned, Measures, Run, Snapshot, Tick, VesselSample, run};
 
-/// Runs `config` and writes `timeseries.csv`, `summary.json`, `safety.json`
-/// and (with `figures`) the five figures into `out`; with `record`, also a
+/// Runs `config` and writes `timeseries.csv`, `summary.json`, `safety.json`,
+/// with a truth `learning.json` and `learning.csv` (after a second,
+/// clairvoyant run for H★), and (with `figures`) the five figures into
+/// `out`; with `record`, also a
 /// recording in its directory (see [`record::record`]), whose file it
 /// returns.
 pub fn run_to_dir(
@@ -60,9 +64,23 @@ pub fn run_to_dir(
     if figures {
         figures::draw_all(out, config, &result).map_err(SimError::Figure)?;
     }
+    let learning = match &config.learning {
+        Some(_) => {
+            let h_star = h_star(config, &result)?;
+            output::write_learning_series(&out.join("learning.csv"), &result, h_star)
+                .map_err(io)?;
+            let s = output::LearningSummary::new(config, &result, h_star);
+            if let Some(s) = &s {
+                output::write_learning(&out.join("learning.json"), s).map_err(io)?;
+            }
+            s
+        }
+        None => None,
+    };
     Ok(Written {
         summary,
         safety,
+        learning,
         recording,
     })
 }
@@ -71,6 +89,28 @@ pub fn run_to_dir(
 pub struct Written {
     pub summary: output::Summary,
     pub safety: output::SafetySummary,
+    /// `learning.json`, when the scenario has a truth.
+    pub learning: Option<output::LearningSummary>,
     /// The recording's file, when it recorded.
     pub recording: Option<std::path::PathBuf>,
+}
+
+/// H★: the truth's H where the clairvoyant fleet ends, the same run
+/// covering the truth itself (`run` already is that run when it covered
+/// the truth).
+fn h_star(config: &Config, result: &Run) -> Result<f64, SimError> {
+    let Some(l) = &config.learning else {
+        return Ok(f64::NAN);
+    };
+    let last = |r: &Run| r.ticks.last().map_or(f64::NAN, |t| t.h_true);
+    if l.cover == learn::Cover::Truth {
+        return Ok(last(result));
+    }
+    let mut clairvoyant = config.clone();
+    clairvoyant.lloyd = false;
+    clairvoyant.snapshots.clear();
+    if let Some(c) = &mut clairvoyant.learning {
+        c.cover = learn::Cover::Truth;
+    }
+    Ok(last(&run(&clairvoyant, |_| {})?))
 }

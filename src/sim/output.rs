@@ -212,3 +212,91 @@ pub fn write_summary(path: &Path, summary: &Summary) -> std::io::Result<()> {
     let text = serde_json::to_string_pretty(summary).expect("summaries serialize");
     std::fs::write(path, text + "\n")
 }
+
+/// `learning.json`, for a scenario with a truth (docs/learning.md): what
+/// the fleet covered, how it sampled and learned, and H judged on the
+/// truth against H★, the truth's H where the clairvoyant fleet (the same
+/// run covering the truth itself) ends.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct LearningSummary {
+    /// `learned`, `prior` (no learning) or `truth` (the clairvoyant).
+    pub cover: &'static str,
+    pub kappa: f64,
+    /// Noise σ as a share of the truth's range.
+    pub noise: f64,
+    pub outliers: f64,
+    pub sample_rate_hz: f64,
+    pub refit_s: f64,
+    pub lattice_m: f64,
+    pub samples: usize,
+    pub fits: usize,
+    #[serde(rename = "H_true_end")]
+    pub h_true_end: f64,
+    #[serde(rename = "H_star")]
+    pub h_star: f64,
+    /// H_true / H★ at the end.
+    pub share_end: f64,
+    /// From when on H_true stays at or above 99.5 % and 99 % of H★ [s].
+    pub t_99_5: Option<f64>,
+    pub t_99: Option<f64>,
+}
+
+impl LearningSummary {
+    /// `None` without a truth.
+    pub fn new(config: &Config, run: &Run, h_star: f64) -> Option<LearningSummary> {
+        let l = config.learning.as_ref()?;
+        let learned = run.learned?;
+        let last = run.ticks.last().expect("a run has a last tick");
+        let since = |share: f64| {
+            let below = run.ticks.iter().rposition(|t| t.h_true < share * h_star);
+            match below {
+                None => run.ticks.first().map(|t| t.t),
+                Some(i) => run.ticks.get(i + 1).map(|t| t.t),
+            }
+        };
+        Some(LearningSummary {
+            cover: match l.cover {
+                super::Cover::Learned => "learned",
+                super::Cover::Prior => "prior",
+                super::Cover::Truth => "truth",
+            },
+            kappa: l.kappa,
+            noise: l.noise,
+            outliers: l.outliers,
+            sample_rate_hz: l.rate,
+            refit_s: l.refit,
+            lattice_m: l.spacing,
+            samples: learned.samples,
+            fits: learned.fits,
+            h_true_end: last.h_true,
+            h_star,
+            share_end: last.h_true / h_star,
+            t_99_5: since(0.995),
+            t_99: since(0.99),
+        })
+    }
+}
+
+/// Writes `learning.json`.
+pub fn write_learning(path: &Path, summary: &LearningSummary) -> std::io::Result<()> {
+    let text = serde_json::to_string_pretty(summary).expect("summaries serialize");
+    std::fs::write(path, text + "\n")
+}
+
+/// Writes `learning.csv`: one row per tick, H of what the fleet covers,
+/// H on the truth and its share of H★.
+pub fn write_learning_series(path: &Path, run: &Run, h_star: f64) -> std::io::Result<()> {
+    let mut w = std::io::BufWriter::new(std::fs::File::create(path)?);
+    writeln!(w, "t,H,H_true,share")?;
+    for tick in &run.ticks {
+        writeln!(
+            w,
+            "{:.3},{:.6},{:.6},{:.6}",
+            tick.t,
+            tick.h,
+            tick.h_true,
+            tick.h_true / h_star
+        )?;
+    }
+    w.flush()
+}

@@ -3,6 +3,7 @@
 //! the tick, and what it records ([`Run`]).
 
 use super::config::{Config, SimError};
+use super::learn::Learning;
 use super::monitor::{Monitor, SafetyRecord};
 use crate::control::controller::control;
 use crate::control::disturbance::Disturbance;
@@ -40,7 +41,10 @@ pub struct VesselSample {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Tick {
     pub t: f64,
+    /// H of the density the fleet covers.
     pub h: f64,
+    /// H judged on the scenario's truth (NaN without one).
+    pub h_true: f64,
     pub lloyd_h: f64,
     pub vessels: Vec<VesselSample>,
     pub lloyd_positions: Vec<Point>,
@@ -76,6 +80,15 @@ pub struct Run {
     pub measures: Measures,
     /// Collisions, incursions, closest approaches and interventions.
     pub safety: SafetyRecord,
+    /// Samples taken and fits made, when the scenario has a truth.
+    pub learned: Option<Learned>,
+}
+
+/// What a run with a truth sampled and fitted.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Learned {
+    pub samples: usize,
+    pub fits: usize,
 }
 
 pub(super) fn fleet_at(config: &Config, positions: impl Iterator<Item = Point>) -> Option<Fleet> {
@@ -99,6 +112,18 @@ pub fn run(config: &Config, mut progress: impl FnMut(f64)) -> Result<Run, SimErr
         1.0 / config.tick_hz,
     );
     let mut hulls = Hulls::new(config);
+    let mut learning = match &config.learning {
+        Some(l) => Some(
+            Learning::new(
+                l,
+                &config.scenario.region,
+                &config.scenario.risk,
+                config.seed,
+            )
+            .map_err(|e| SimError::Scenario(e.into()))?,
+        ),
+        None => None,
+    };
     let h = config.step;
     let steps = (config.duration / h).round() as usize;
     let per_tick = ((1.0 / config.tick_hz) / h).round().max(1.0) as usize;
@@ -114,7 +139,9 @@ pub fn run(config: &Config, mut progress: impl FnMut(f64)) -> Result<Run, SimErr
         // Every tick, and the final state even when the duration is not a
         // whole number of ticks.
         if k % per_tick == 0 || k == steps {
-            let (tick, eval) = hulls.tick(config, t, &layer, &mut monitor, per_tick as f64 * h)?;
+            let period = per_tick as f64 * h;
+            let (tick, eval) =
+                hulls.tick(config, t, &layer, &mut monitor, period, learning.as_mut())?;
             if let Some(pos) = pending_snapshots.iter().position(|&ts| ts <= t + 1e-9) {
                 pending_snapshots.remove(pos);
                 snapshots.push(Snapshot {
@@ -141,6 +168,10 @@ pub fn run(config: &Config, mut progress: impl FnMut(f64)) -> Result<Run, SimErr
         snapshots,
         measures,
         safety: monitor.record,
+        learned: learning.map(|l| Learned {
+            samples: l.samples,
+            fits: l.fits,
+        }),
     })
 }
 
@@ -222,8 +253,9 @@ impl Hulls {
         layer: &SafetyLayer,
         monitor: &mut Monitor,
         period: f64,
+        learning: Option<&mut Learning>,
     ) -> Result<(Tick, crate::coverage::Evaluation), SimError> {
-        let (region, risk) = (&config.scenario.region, &config.scenario.risk);
+        let region = &config.scenario.region;
         let options = Options::default();
         let diverged = self.states.iter().position(|s| {
             !(s.x.is_finite() && s.y.is_finite()) || s.x.abs() > 1e6 || s.y.abs() > 1e6
@@ -231,9 +263,30 @@ impl Hulls {
         if let Some(vessel) = diverged {
             return Err(SimError::Diverged { vessel, t });
         }
-        let fleet = fleet_at(config, self.states.iter().map(|s| Point { x: s.x, y: s.y }))
-            .ok_or(SimError::Diverged { vessel: 0, t })?;
-        let eval = evaluate(region, risk, &fleet, &options);
+        let at: Vec<Point> = self
+            .states
+            .iter()
+            .map(|s| Point { x: s.x, y: s.y })
+            .collect();
+        let fleet =
+            fleet_at(config, at.iter().copied()).ok_or(SimError::Diverged { vessel: 0, t })?;
+        let (eval, h_true) = match learning {
+            Some(l) => {
+                l.tick(t, &at);
+                let eval = evaluate(region, &l.cover, &fleet, &options);
+                let h_true = if l.covers_truth() {
+                    eval.h
+                } else {
+                    evaluate(region, l.truth(), &fleet, &options).h
+                };
+                (eval, h_true)
+            }
+            None => (
+                evaluate(region, &config.scenario.risk, &fleet, &options),
+                f64::NAN,
+            ),
+        };
+        let risk = &config.scenario.risk;
         let lloyd_eval = if config.lloyd {
             let lloyd_fleet = fleet_at(config, self.lloyd_positions.iter().copied())
                 .ok_or(SimError::Diverged { vessel: 0, t })?;
@@ -272,6 +325,7 @@ impl Hulls {
         let tick = Tick {
             t,
             h: eval.h,
+            h_true,
             lloyd_h: lloyd_eval.as_ref().map_or(f64::NAN, |e| e.h),
             vessels: samples,
             lloyd_positions: self.lloyd_positions.clone(),

@@ -40,6 +40,7 @@ mod recording;
 mod safety;
 mod shutdown;
 mod sim;
+mod sim_learning;
 mod sitl_script;
 mod soak;
 mod tidy;

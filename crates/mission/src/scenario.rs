@@ -57,6 +57,9 @@ impl ScenarioError {
 pub struct Scenario {
     pub region: Region,
     pub risk: RiskField,
+    /// The field a simulation samples, never given to the fleet
+    /// (`seacover sim` only; docs/learning.md).
+    pub truth: Option<RiskField>,
     pub fleet: Fleet,
     /// Vessel ids, in the fleet's order.
     pub ids: Vec<String>,
@@ -79,6 +82,8 @@ pub struct LocalScenario {
     pub origin: Option<OriginDocument>,
     pub region: Option<RegionDocument>,
     pub risk: Option<RiskDocument>,
+    /// The field a simulation samples (`seacover sim` only).
+    pub truth: Option<RiskDocument>,
     pub vessels: Vec<VesselDocument>,
 }
 
@@ -113,7 +118,12 @@ pub fn localize(
         risk: doc
             .risk
             .as_ref()
-            .map(|r| input::risk(r, frame))
+            .map(|r| input::risk(r, frame, "risk"))
+            .transpose()?,
+        truth: doc
+            .truth
+            .as_ref()
+            .map(|r| input::risk(r, frame, "truth"))
             .transpose()?,
         vessels: doc
             .vessels
@@ -137,6 +147,48 @@ pub fn region_from_document(doc: &RegionDocument) -> Result<Region, ScenarioErro
     .map_err(InputError::from)?)
 }
 
+/// A risk document as a field; `field` (`risk` or `truth`) names it in
+/// errors.
+fn risk_field(doc: &RiskDocument, field: &str) -> Result<RiskField, ScenarioError> {
+    let mut object_ids = HashSet::new();
+    for (i, o) in doc.objects.iter().enumerate() {
+        if let Some(id) = &o.id {
+            if !valid_id(id) {
+                return Err(InputError::invalid(
+                    format!("{field}.objects[{i}].id"),
+                    "must match [A-Za-z0-9_.-]{1,64}",
+                )
+                .into());
+            }
+            if !object_ids.insert(id.as_str()) {
+                return Err(InputError::invalid(
+                    format!("{field}.objects[{i}].id"),
+                    format!("duplicate id {id:?}"),
+                )
+                .into());
+            }
+        }
+    }
+    let objects = doc
+        .objects
+        .iter()
+        .map(|o| RiskObject {
+            center: Point { x: o.x, y: o.y },
+            alpha: o.alpha,
+            sigma: o.sigma,
+        })
+        .collect();
+    // The engine names the fields of the one density it knows, `risk`.
+    RiskField::new(doc.base, objects).map_err(|e| match e {
+        InputError::Invalid { field: f, reason } => InputError::Invalid {
+            field: f.replacen("risk", field, 1),
+            reason,
+        }
+        .into(),
+        e => e.into(),
+    })
+}
+
 impl Scenario {
     /// Validates a document; `region` and `risk` must be present.
     pub fn from_document(doc: &LocalScenario) -> Result<Self, ScenarioError> {
@@ -150,37 +202,12 @@ impl Scenario {
             .ok_or_else(|| InputError::invalid("risk", "is required"))?;
         let region = region_from_document(region_doc)?;
 
-        let mut object_ids = HashSet::new();
-        for (i, o) in risk_doc.objects.iter().enumerate() {
-            if let Some(id) = &o.id {
-                if !valid_id(id) {
-                    return Err(InputError::invalid(
-                        format!("risk.objects[{i}].id"),
-                        "must match [A-Za-z0-9_.-]{1,64}",
-                    )
-                    .into());
-                }
-                if !object_ids.insert(id.as_str()) {
-                    return Err(InputError::invalid(
-                        format!("risk.objects[{i}].id"),
-                        format!("duplicate id {id:?}"),
-                    )
-                    .into());
-                }
-            }
-        }
-        let risk = RiskField::new(
-            risk_doc.base,
-            risk_doc
-                .objects
-                .iter()
-                .map(|o| RiskObject {
-                    center: Point { x: o.x, y: o.y },
-                    alpha: o.alpha,
-                    sigma: o.sigma,
-                })
-                .collect(),
-        )?;
+        let risk = risk_field(risk_doc, "risk")?;
+        let truth = doc
+            .truth
+            .as_ref()
+            .map(|t| risk_field(t, "truth"))
+            .transpose()?;
 
         let mut ids = Vec::with_capacity(doc.vessels.len());
         let mut seen = HashSet::new();
@@ -221,6 +248,7 @@ impl Scenario {
         Ok(Scenario {
             region,
             risk,
+            truth,
             fleet,
             ids,
         })

@@ -52,6 +52,11 @@ pub struct ScenarioDocument {
     /// Omitted: taken from the current mission (server) or rejected (CLI).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub risk: Option<RiskInput>,
+    /// The field simulated vessels measure, in the shape of `risk`: read
+    /// only by `seacover sim`, which never gives it to the fleet, only its
+    /// samples (docs/learning.md). `risk` is then the fleet's prior.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub truth: Option<RiskInput>,
     pub vessels: Vec<VesselInput>,
 }
 

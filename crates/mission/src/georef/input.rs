@@ -232,15 +232,20 @@ pub fn risk_object(
     }
 }
 
-/// A scenario's risk density in the local plane.
-pub fn risk(input: &RiskInput, frame: Option<&LocalFrame>) -> Result<RiskDocument, InputError> {
+/// A scenario's risk density (or its truth: `field` names which) in the
+/// local plane.
+pub fn risk(
+    input: &RiskInput,
+    frame: Option<&LocalFrame>,
+    field: &str,
+) -> Result<RiskDocument, InputError> {
     Ok(RiskDocument {
         base: input.base,
         objects: input
             .objects
             .iter()
             .enumerate()
-            .map(|(i, o)| risk_object(o, frame, &format!("risk.objects[{i}]")))
+            .map(|(i, o)| risk_object(o, frame, &format!("{field}.objects[{i}]")))
             .collect::<Result<_, _>>()?,
     })
 }

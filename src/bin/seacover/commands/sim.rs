@@ -66,6 +66,74 @@ pub(crate) struct Args {
     /// plus each vessel's truth, disturbance and observer estimate.
     #[arg(long, value_name = "DIR")]
     record: Option<PathBuf>,
+    #[command(flatten)]
+    learning: Learning,
+}
+
+/// Sampling and learning, for a scenario with a `truth` (docs/learning.md).
+#[derive(clap::Args)]
+#[command(next_help_heading = "Learning (a scenario with a truth)")]
+struct Learning {
+    /// What the fleet covers: the belief learned from samples (`learned`),
+    /// the scenario's risk alone (`prior`: no learning) or the truth
+    /// itself (`truth`: the clairvoyant).
+    #[arg(long, value_enum, default_value = "learned")]
+    cover: Cover,
+    /// Optimism: posterior standard deviations added to the belief (0:
+    /// the mean).
+    #[arg(long, value_name = "K", default_value_t = 0.0)]
+    kappa: f64,
+    /// Sample noise σ, as a share of the truth's range.
+    #[arg(long, value_name = "SHARE", default_value_t = 0.05)]
+    noise: f64,
+    /// Share of samples replaced by gross outliers.
+    #[arg(long, value_name = "SHARE", default_value_t = 0.0)]
+    outliers: f64,
+    /// Samples per second per vessel.
+    #[arg(long, value_name = "HZ", default_value_t = 1.0)]
+    sample_rate: f64,
+    /// Seconds between fits of the belief.
+    #[arg(long, value_name = "SECONDS", default_value_t = 5.0)]
+    refit: f64,
+    /// Spacing of the belief's lattice of Gaussians (and their spread).
+    #[arg(long, value_name = "M", default_value_t = 10.0)]
+    lattice: f64,
+}
+
+impl Learning {
+    /// The flags onto a run's learning settings.
+    fn apply(&self, l: &mut seacover::sim::LearningConfig) -> anyhow::Result<()> {
+        l.cover = match self.cover {
+            Cover::Learned => seacover::sim::Cover::Learned,
+            Cover::Prior => seacover::sim::Cover::Prior,
+            Cover::Truth => seacover::sim::Cover::Truth,
+        };
+        (l.kappa, l.noise, l.outliers) = (self.kappa, self.noise, self.outliers);
+        (l.rate, l.refit, l.spacing) = (self.sample_rate, self.refit, self.lattice);
+        l.validate().map_err(anyhow::Error::msg)
+    }
+}
+
+/// The line `sim` prints about a run that learned.
+fn learned(l: &seacover::sim::output::LearningSummary) -> String {
+    format!(
+        "learning (cover {}): H on the truth {:.2}, {:.2} % of H★ {:.2} at the end; at or above 99.5 % from {}; {} samples, {} fits (learning.json, learning.csv)",
+        l.cover,
+        l.h_true_end,
+        100.0 * l.share_end,
+        l.h_star,
+        l.t_99_5
+            .map_or("never".to_string(), |t| format!("{t:.1} s")),
+        l.samples,
+        l.fits
+    )
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum Cover {
+    Learned,
+    Prior,
+    Truth,
 }
 
 #[derive(clap::Subcommand)]
@@ -170,6 +238,9 @@ fn simulate(args: &Args) -> anyhow::Result<()> {
     config.safety.safety_distance = args.safety_distance;
     config.safety.shore_distance = args.shore_distance;
     config.safety.validate()?;
+    if let Some(l) = &mut config.learning {
+        args.learning.apply(l)?;
+    }
     let config = match args.starts {
         Starts::Scenario => config,
         Starts::Random => {
@@ -230,6 +301,9 @@ fn simulate(args: &Args) -> anyhow::Result<()> {
         safety.min_shore_clearance,
         100.0 * safety.intervention_rate,
     );
+    if let Some(l) = &written.learning {
+        eprintln!("{}", learned(l));
+    }
     if let Some(file) = written.recording {
         eprintln!("recorded: {}", file.display());
     }

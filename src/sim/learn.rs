@@ -1,0 +1,220 @@
+//! Learning the risk map in the simulated loop (docs/learning.md): the
+//! scenario's hidden `truth` is sampled at every hull's true position, the
+//! fleet covers the belief fitted to those samples, and every tick is also
+//! judged on the truth.
+//!
+//! Invariants: the truth reaches the fleet only through samples; the noise
+//! is seeded, so a run is deterministic for its seed; a vessel's samples
+//! are drawn in the fleet's order at every sampling instant.
+
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use crate::coverage::{InputError, RiskField};
+use crate::geometry::{Point, Region};
+use crate::learning::{Lattice, Learner, Params, Sample};
+
+/// How the simulated fleet measures and learns the field.
+#[derive(Debug, Clone)]
+pub struct LearningConfig {
+    /// The field the vessels measure (never given to the fleet).
+    pub truth: RiskField,
+    /// Samples per second per vessel [Hz].
+    pub rate: f64,
+    /// Noise σ as a share of the truth's range over the region.
+    pub noise: f64,
+    /// Share of samples replaced by a gross outlier (a value anywhere in
+    /// [0, 5 × range]).
+    pub outliers: f64,
+    /// Seconds between fits.
+    pub refit: f64,
+    /// The lattice's spacing (and each Gaussian's spread) [m].
+    pub spacing: f64,
+    /// Optimism κ: posterior standard deviations added (0: the mean).
+    pub kappa: f64,
+    /// What the fleet covers: the belief, or (for comparison) the prior
+    /// alone or the truth itself.
+    pub cover: Cover,
+}
+
+/// What the simulated fleet covers when the scenario has a truth.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Cover {
+    /// The belief learned from samples, the scenario's risk as its prior.
+    Learned,
+    /// The scenario's risk, samples ignored (no learning).
+    Prior,
+    /// The truth (the clairvoyant fleet that defines H★).
+    Truth,
+}
+
+impl LearningConfig {
+    /// The defaults of docs/learning.md: 1 Hz, σ 5 % of the range, no
+    /// outliers, a fit every 5 s, a 10 m lattice, the mean.
+    pub fn new(truth: RiskField) -> Self {
+        LearningConfig {
+            truth,
+            rate: 1.0,
+            noise: 0.05,
+            outliers: 0.0,
+            refit: 5.0,
+            spacing: 10.0,
+            kappa: 0.0,
+            cover: Cover::Learned,
+        }
+    }
+}
+
+impl LearningConfig {
+    /// Checks every setting's range; errors name the `seacover sim` flag.
+    pub fn validate(&self) -> Result<(), &'static str> {
+        let check = |ok: bool, what: &'static str| if ok { Ok(()) } else { Err(what) };
+        check(
+            (0.0..=10.0).contains(&self.kappa),
+            "--kappa must be in [0, 10]",
+        )?;
+        check(
+            self.noise > 0.0 && self.noise <= 1.0,
+            "--noise must be in (0, 1]",
+        )?;
+        check(
+            (0.0..=0.5).contains(&self.outliers),
+            "--outliers must be in [0, 0.5]",
+        )?;
+        check(
+            self.rate > 0.0 && self.rate <= 10.0,
+            "--sample-rate must be in (0, 10] Hz",
+        )?;
+        check(
+            (0.1..=3600.0).contains(&self.refit),
+            "--refit must be in [0.1, 3600] s",
+        )?;
+        check(
+            self.spacing.is_finite() && self.spacing > 0.0,
+            "--lattice must be a length > 0 m",
+        )
+    }
+}
+
+/// The learning side of one run.
+pub(super) struct Learning {
+    config: LearningConfig,
+    learner: Learner,
+    rng: ChaCha8Rng,
+    /// σ of every sample (the noise is known to the simulated sensor).
+    sd: f64,
+    range: f64,
+    next_sample: f64,
+    next_fit: f64,
+    /// What the fleet covers now.
+    pub(super) cover: RiskField,
+    pub(super) samples: usize,
+    pub(super) fits: usize,
+}
+
+impl Learning {
+    pub(super) fn new(
+        config: &LearningConfig,
+        region: &Region,
+        prior: &RiskField,
+        seed: u64,
+    ) -> Result<Learning, InputError> {
+        let (min, max) = region.bounds();
+        let lattice = Lattice::over(min, max, config.spacing)?;
+        let range = range_over(&config.truth, region);
+        // A flat truth has no range: its noise is then a share of its level.
+        let scale = if range > 0.0 {
+            range
+        } else {
+            config.truth.value(min).abs().max(1e-9)
+        };
+        let cover = match config.cover {
+            Cover::Truth => config.truth.clone(),
+            Cover::Learned | Cover::Prior => prior.clone(),
+        };
+        Ok(Learning {
+            learner: Learner::new(lattice, prior.clone(), Params::new(1.0, 1.0, 5.0)?),
+            rng: ChaCha8Rng::seed_from_u64(seed ^ 0x5eac_0fe4),
+            sd: config.noise.max(1e-6) * scale,
+            range: scale,
+            next_sample: 0.0,
+            next_fit: 0.0,
+            cover,
+            samples: 0,
+            fits: 0,
+            config: config.clone(),
+        })
+    }
+
+    /// The truth (what H_true is judged on).
+    pub(super) fn truth(&self) -> &RiskField {
+        &self.config.truth
+    }
+
+    pub(super) fn covers_truth(&self) -> bool {
+        self.config.cover == Cover::Truth
+    }
+
+    /// At tick time `t` with the hulls at `at`: samples when due, a fit
+    /// when due; returns whether what the fleet covers changed.
+    pub(super) fn tick(&mut self, t: f64, at: &[Point]) -> bool {
+        // Only a learning fleet samples: the others would ignore it.
+        if self.config.cover != Cover::Learned {
+            return false;
+        }
+        while self.next_sample <= t + 1e-9 {
+            for &q in at {
+                let value = self.measure(q);
+                if let Ok(s) = Sample::new(q, value, self.sd) {
+                    self.learner.add(s);
+                    self.samples += 1;
+                }
+            }
+            self.next_sample += 1.0 / self.config.rate;
+        }
+        if self.next_fit > t + 1e-9 {
+            return false;
+        }
+        while self.next_fit <= t + 1e-9 {
+            self.next_fit += self.config.refit;
+        }
+        self.cover = self.learner.fit().density(self.config.kappa);
+        self.fits += 1;
+        true
+    }
+
+    /// One noisy reading of the truth at `q`.
+    fn measure(&mut self, q: Point) -> f64 {
+        // Box–Muller.
+        let (u1, u2): (f64, f64) = (self.rng.random::<f64>().max(1e-300), self.rng.random());
+        let noise = (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos();
+        let outlier: f64 = self.rng.random();
+        let wild: f64 = self.rng.random();
+        if outlier < self.config.outliers {
+            wild * 5.0 * self.range
+        } else {
+            self.config.truth.value(q) + self.sd * noise
+        }
+    }
+}
+
+/// The truth's range (largest less smallest) on a 1 m grid of the
+/// region's bounding box, at most 500 × 500 points.
+fn range_over(field: &RiskField, region: &Region) -> f64 {
+    let (min, max) = region.bounds();
+    let steps = |a: f64, b: f64| ((b - a).ceil() as usize).clamp(1, 500);
+    let (nx, ny) = (steps(min.x, max.x), steps(min.y, max.y));
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for j in 0..=ny {
+        for i in 0..=nx {
+            let q = Point {
+                x: min.x + (max.x - min.x) * i as f64 / nx as f64,
+                y: min.y + (max.y - min.y) * j as f64 / ny as f64,
+            };
+            let v = field.value(q);
+            lo = lo.min(v);
+            hi = hi.max(v);
+        }
+    }
+    hi - lo
+}

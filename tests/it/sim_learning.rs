@@ -1,0 +1,131 @@
+//! `seacover sim` learning a scenario's hidden truth (docs/learning.md, "In
+//! the simulator"): every row of the page's table is run again with the
+//! real binary and compared as the page prints it; the fleet that learns
+//! reaches 99.5 % of H★ within 300 s for seeds 1–5, and the one that does
+//! not stays below 93 %. A truth that fails validation is named as such.
+
+use std::process::Command;
+
+use serde_json::Value;
+
+const PAGE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/docs/learning.md");
+const SCENARIO: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/paper-learning.json");
+
+/// `seacover sim --scenario SCENARIO --duration 300 --no-figures ARGS`:
+/// its `learning.json`.
+fn learn(args: &[&str]) -> Value {
+    let dir = tempfile::tempdir().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_seacover"))
+        .args(["sim", "--scenario", SCENARIO, "--duration", "300"])
+        .args(["--no-figures", "--out"])
+        .arg(dir.path())
+        .args(args)
+        .output()
+        .expect("the binary runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(dir.path().join("learning.json")).unwrap();
+    let csv = std::fs::read_to_string(dir.path().join("learning.csv")).unwrap();
+    assert!(csv.starts_with("t,H,H_true,share\n"), "{csv:.80}");
+    assert_eq!(csv.lines().count(), 3002, "a header and 3001 ticks");
+    serde_json::from_str(&text).unwrap()
+}
+
+/// The rows of the page's table (flags, share at 300 s, from when 99.5 %).
+fn rows() -> Vec<(Vec<String>, String, String)> {
+    let page = std::fs::read_to_string(PAGE).unwrap();
+    let mut lines = page
+        .lines()
+        .skip_while(|l| !l.starts_with("| flags | H on the truth"));
+    assert!(lines.next().is_some(), "docs/learning.md has the table");
+    lines
+        .skip(1)
+        .take_while(|l| l.starts_with('|'))
+        .map(|l| {
+            let cells: Vec<&str> = l.trim_matches('|').split('|').map(str::trim).collect();
+            let flags = cells[0]
+                .trim_matches('`')
+                .split_whitespace()
+                .map(String::from)
+                .collect();
+            (flags, cells[1].to_string(), cells[2].to_string())
+        })
+        .collect()
+}
+
+#[test]
+fn the_learning_table_is_what_sim_prints_and_learning_reaches_h_star() {
+    let rows = rows();
+    assert!(rows.len() >= 8, "{rows:?}");
+    let mut seeds = 0;
+    for (flags, share, since) in &rows {
+        let args: Vec<&str> = flags.iter().map(String::as_str).collect();
+        let l = learn(&args);
+        let got = l["share_end"].as_f64().unwrap();
+        let from = match l["t_99_5"].as_f64() {
+            Some(t) => format!("{t:.1} s"),
+            None => "never".to_string(),
+        };
+        assert_eq!(
+            (format!("{:.2} %", 100.0 * got), from),
+            (share.clone(), since.clone()),
+            "{flags:?}"
+        );
+        let h_star = l["H_star"].as_f64().unwrap();
+        assert!(h_star > 9000.0, "{flags:?}: H★ {h_star}");
+        match args.as_slice() {
+            ["--seed", _] => {
+                seeds += 1;
+                assert!(got >= 0.995, "{flags:?}: {got}");
+                assert_eq!(l["cover"], "learned");
+                assert_eq!(l["samples"], 8 * 301, "one sample a second each");
+                assert_eq!(l["fits"], 61, "one fit every 5 s");
+            }
+            ["--cover", "prior"] => {
+                assert!(got < 0.93, "no learning: {got}");
+                assert_eq!(l["samples"], 0);
+            }
+            _ => {}
+        }
+    }
+    assert_eq!(seeds, 5, "the table has seeds 1–5");
+}
+
+#[test]
+fn a_bad_truth_is_named_and_refused() {
+    let mut doc: Value = serde_json::from_str(&std::fs::read_to_string(SCENARIO).unwrap()).unwrap();
+    doc["truth"]["objects"][1]["sigma"] = Value::from(-1.0);
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("bad.json");
+    std::fs::write(&file, doc.to_string()).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_seacover"))
+        .args(["sim", "--duration", "1", "--no-figures", "--scenario"])
+        .arg(&file)
+        .arg("--out")
+        .arg(dir.path().join("out"))
+        .output()
+        .expect("the binary runs");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{err}");
+    assert!(err.contains("truth.objects[1].sigma"), "{err}");
+    // And a setting out of range names its flag.
+    let out = Command::new(env!("CARGO_BIN_EXE_seacover"))
+        .args([
+            "sim",
+            "--duration",
+            "1",
+            "--no-figures",
+            "--scenario",
+            SCENARIO,
+        ])
+        .args(["--noise", "0", "--out"])
+        .arg(dir.path().join("out"))
+        .output()
+        .expect("the binary runs");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{err}");
+    assert!(err.contains("--noise must be in (0, 1]"), "{err}");
+}
