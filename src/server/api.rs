@@ -442,3 +442,72 @@ pub(super) async fn coverage_history(
     let history = app.snapshot.borrow().history.clone();
     Json(history.as_ref().clone())
 }
+
+/// Samples of the risk field from any sensor (docs/learning.md), a batch of
+/// at most 1000. Each is judged on its own: taken into the learner, or
+/// refused by its index with a code (`invalid`, `outside_region`, `stale`,
+/// `future`, `flood`) and counted in `seacover_samples_total`. A
+/// coordinator that does not learn refuses the batch (409).
+#[utoipa::path(
+    post,
+    path = "/api/v1/samples",
+    tag = "learning",
+    request_body = crate::protocol::SamplesDocument,
+    responses(
+        (status = 200, description = "How many were taken, and each refusal.", body = crate::protocol::SamplesAnswerDocument),
+        (status = 409, response = super::responses::Conflict),
+        super::responses::DocumentWrite,
+    ),
+    security(("bearer" = [])),
+)]
+pub(super) async fn post_samples(
+    State(app): State<AppState>,
+    body: Bytes,
+) -> Result<Json<crate::protocol::SamplesAnswerDocument>, ApiError> {
+    let batch: crate::protocol::SamplesDocument = parse(&body)?;
+    if batch.samples.len() > MAX_SAMPLES {
+        return Err(ApiError::Invalid(format!(
+            "samples: at most {MAX_SAMPLES} in a batch, got {}",
+            batch.samples.len()
+        )));
+    }
+    let (reply, answer) = oneshot::channel();
+    app.requests
+        .send(Request::Samples {
+            samples: batch.samples,
+            reply,
+        })
+        .await
+        .map_err(|_| ApiError::ShuttingDown)?;
+    Ok(Json(answer.await.map_err(|_| ApiError::ShuttingDown)??))
+}
+
+/// The most samples one `POST /api/v1/samples` carries.
+const MAX_SAMPLES: usize = 1000;
+
+/// The risk density the fleet covers: the belief learned from samples once
+/// fitted, else the mission's own risk; with the learner's state.
+#[utoipa::path(
+    get,
+    path = "/api/v1/risk",
+    tag = "learning",
+    responses((status = 200, description = "The density covered and where it comes from.", body = crate::protocol::BeliefDocument)),
+)]
+pub(super) async fn risk(State(app): State<AppState>) -> Json<crate::protocol::BeliefDocument> {
+    let (reply, answer) = oneshot::channel();
+    if app.requests.send(Request::Belief { reply }).await.is_ok()
+        && let Ok(doc) = answer.await
+    {
+        return Json(doc);
+    }
+    // A replay (or a coordinator stopping): the recorded mission's risk.
+    let risk = app.snapshot.borrow().document.mission.risk.clone();
+    Json(crate::protocol::BeliefDocument {
+        source: "mission".into(),
+        risk,
+        samples: 0,
+        fits: 0,
+        fitted_at: None,
+        kappa: 0.0,
+    })
+}

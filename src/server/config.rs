@@ -34,6 +34,11 @@
 //! [guidance]
 //! mode = "course"
 //! max_speed = 1.5
+//!
+//! [learning]           # learn the risk map from samples (docs/learning.md)
+//! kappa = 0.0          # optimism: posterior standard deviations added
+//! refit = 5.0          # mission seconds between fits
+//! lattice = 10.0       # spacing and spread of the belief's Gaussians [m]
 //! ```
 
 use std::path::{Path, PathBuf};
@@ -60,6 +65,18 @@ pub struct ConfigFile {
     pub guidance: GuidanceSection,
     #[serde(default)]
     pub safety: SafetySection,
+    /// Present (even empty): learn the risk map from samples.
+    pub learning: Option<LearningSection>,
+}
+
+/// `[learning]`, each key defaulting to
+/// [`LearnSettings::default`](crate::server::LearnSettings).
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LearningSection {
+    pub kappa: Option<f64>,
+    pub refit: Option<f64>,
+    pub lattice: Option<f64>,
 }
 
 /// The safety filter, each key defaulting to
@@ -107,6 +124,8 @@ pub struct Settings {
     pub liveness: f64,
     pub write_rate: u32,
     pub write_burst: u32,
+    /// `[learning]`, when present.
+    pub learning: Option<crate::server::LearnSettings>,
 }
 
 impl Default for Settings {
@@ -116,6 +135,7 @@ impl Default for Settings {
             liveness: 3.0,
             write_rate: 50,
             write_burst: 100,
+            learning: None,
         }
     }
 }
@@ -227,13 +247,47 @@ impl Settings {
                 "server.write_rate and server.write_burst: must be > 0".into(),
             ));
         }
+        let learning = match &file.learning {
+            Some(l) => Some(learning(l, &mission)?),
+            None => None,
+        };
         Ok(Settings {
             mission,
             liveness,
             write_rate,
             write_burst,
+            learning,
         })
     }
+}
+
+/// `[learning]` checked against the mission's region.
+fn learning(
+    l: &LearningSection,
+    mission: &Mission,
+) -> Result<crate::server::LearnSettings, ApiError> {
+    let d = crate::server::LearnSettings::default();
+    let s = crate::server::LearnSettings {
+        kappa: l.kappa.unwrap_or(d.kappa),
+        refit: l.refit.unwrap_or(d.refit),
+        lattice: l.lattice.unwrap_or(d.lattice),
+    };
+    let invalid = |m: &str| Err(ApiError::Invalid(m.into()));
+    if !(0.0..=10.0).contains(&s.kappa) {
+        return invalid("learning.kappa: must be in [0, 10]");
+    }
+    if !(0.1..=3600.0).contains(&s.refit) {
+        return invalid("learning.refit: must be in [0.1, 3600] s");
+    }
+    let (min, max) = mission.region().bounds();
+    match crate::learning::Lattice::over(min, max, s.lattice) {
+        Ok(_) => {}
+        Err(crate::coverage::InputError::Invalid { reason, .. }) => {
+            return Err(ApiError::Invalid(format!("learning.lattice: {reason}")));
+        }
+        Err(e) => return Err(ApiError::Invalid(e.to_string())),
+    }
+    Ok(s)
 }
 
 /// Why a configuration text was refused.
@@ -312,6 +366,10 @@ mod tests {
             ("[region]\npolygon = [[0, 0], [1, 1], [2, 2]]", "polygon"),
             ("[actuator]\nk = 0\nbeta = 0.001", "actuator"),
             ("[server]\nliveness = 0", "server.liveness"),
+            ("[learning]\nkappa = -1", "learning.kappa"),
+            ("[learning]\nrefit = 0", "learning.refit"),
+            ("[learning]\nlattice = 0.5", "learning.lattice"),
+            ("[learning]\nspread = 5", "spread"),
             ("[safety]\nsafety_distance = -1", "safety.safety_distance"),
             ("[safety]\nbraking = 1", "braking"),
             ("[server]\nwrite_rate = 0", "write_rate"),

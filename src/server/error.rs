@@ -119,7 +119,9 @@ impl From<CoordinatorError> for ApiError {
         match e {
             CoordinatorError::Mission(e) => ApiError::from(e),
             CoordinatorError::Hello(_) => ApiError::Invalid(message),
-            CoordinatorError::Full(_) | CoordinatorError::ReadOnly => ApiError::Conflict(message),
+            CoordinatorError::Full(_)
+            | CoordinatorError::ReadOnly
+            | CoordinatorError::NotLearning => ApiError::Conflict(message),
             CoordinatorError::NoVessel(_) => ApiError::NotFound(message),
             // The store's own words: the client learns why.
             CoordinatorError::Storage(e) => ApiError::Storage(crate::chain::Chain(&e).to_string()),

@@ -34,6 +34,11 @@ pub const MESSAGES_REJECTED: &str = "seacover_messages_rejected_total";
 /// Poses refused as implausible, by reason (`not_finite`, `out_of_range`,
 /// `time_backwards`, `outside_region`, `too_fast`, `jump`, `fix`).
 pub const POSES_REFUSED: &str = "seacover_poses_refused_total";
+/// Samples of the risk field, by outcome (`accepted`, or the refusal's
+/// code: `invalid`, `outside_region`, `stale`, `future`, `flood`).
+pub const SAMPLES: &str = "seacover_samples_total";
+/// Fits of the learned risk map.
+pub const FITS: &str = "seacover_learning_fits_total";
 /// Vessels out of the partition and held because their poses are refused.
 pub const VESSELS_QUARANTINED: &str = "seacover_vessels_quarantined";
 /// Commands the safety filter changed (vessel-ticks); over

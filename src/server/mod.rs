@@ -42,6 +42,7 @@ use crate::mission::Mission;
 use crate::mission::MissionClock;
 use crate::recorder::{Recorder, RecorderConfig};
 pub use app::AppState;
+pub use coordinator::LearnSettings;
 use coordinator::{Coordinator, TickSettings};
 pub use error::MAX_BODY;
 
@@ -69,6 +70,8 @@ pub struct ServeConfig {
     pub mission_source: String,
     /// Join this peer fleet as a member (`serve --peer`).
     pub peer: Option<peer::PeerMember>,
+    /// Learn the risk map from samples (`[learning]` of `--config`).
+    pub learning: Option<LearnSettings>,
 }
 
 impl Default for ServeConfig {
@@ -84,6 +87,7 @@ impl Default for ServeConfig {
             record: None,
             mission_source: "the built-in paper scenario".into(),
             peer: None,
+            learning: None,
         }
     }
 }
@@ -121,6 +125,7 @@ pub fn router(app: AppState) -> Router {
         )
         .route("/api/v1/vessels/{id}", delete(api::delete_vessel))
         .route("/api/v1/vessels/link", get(ws::link))
+        .route("/api/v1/samples", post(api::post_samples))
         // The token is checked first, so strangers cannot spend the budget.
         .route_layer(axum::middleware::from_fn_with_state(
             app.clone(),
@@ -139,6 +144,7 @@ pub fn router(app: AppState) -> Router {
         .route("/api/v1/openapi.json", get(openapi::serve))
         .route("/api/v1/mission", get(api::mission))
         .route("/api/v1/risk-objects", get(api::risk_objects))
+        .route("/api/v1/risk", get(api::risk))
         .route("/api/v1/risk-objects/{id}", get(api::get_object))
         .route("/api/v1/vessels", get(api::vessels))
         .route("/api/v1/vessels/{id}", get(api::vessel))
@@ -259,6 +265,7 @@ pub async fn prepare(
             time_warp: config.time_warp,
             liveness: config.liveness,
             limits: crate::control::plausibility::Limits::default(),
+            learning: config.learning,
         },
         store,
     );

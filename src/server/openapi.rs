@@ -59,6 +59,8 @@ reads are public. The vessel link's messages are also in `api/vessel-link.schema
         vessel_link,
         stream,
         api::coverage_history,
+        api::post_samples,
+        api::risk,
     ),
     components(
         schemas(ErrorDocument, VesselMessage, CoordinatorMessage, SnapshotDocument),
@@ -70,6 +72,7 @@ reads are public. The vessel link's messages are also in `api/vessel-link.schema
         (name = "mission", description = "The task region, the risk density and the WGS84 origin of the local plane."),
         (name = "vessels", description = "The fleet as the coordinator sees it, and the vessel link."),
         (name = "coverage", description = "The current partition and the what-if evaluation."),
+        (name = "learning", description = "Samples of the risk field and the density learned from them."),
     ),
 )]
 pub struct ApiDoc;

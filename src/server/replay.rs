@@ -336,7 +336,12 @@ async fn refuse_writes(mut requests: mpsc::Receiver<Request>, shutdown: Cancella
             Request::Forget { reply, .. } => {
                 let _ = reply.send(Err(refusal()));
             }
-            Request::Gone { .. } | Request::PeerNeighbours(_) => {}
+            Request::Samples { reply, .. } => {
+                let _ = reply.send(Err(refusal()));
+            }
+            // Unanswered: the handler then answers the recorded mission's
+            // risk.
+            Request::Belief { .. } | Request::Gone { .. } | Request::PeerNeighbours(_) => {}
         }
     }
 }

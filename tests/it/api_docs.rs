@@ -197,6 +197,8 @@ fn the_documents_cover_every_endpoint_of_the_spec() {
         ("/api/v1/coverage/history", &["get"]),
         ("/api/v1/coverage/evaluate", &["post"]),
         ("/api/v1/stream", &["get"]),
+        ("/api/v1/samples", &["post"]),
+        ("/api/v1/risk", &["get"]),
     ];
     for (path, methods) in expected {
         let item = paths

@@ -26,6 +26,7 @@ mod first_hour;
 mod geo;
 mod geodesy;
 mod http_edge;
+mod learning_server;
 mod load;
 mod network;
 mod peer_coordinator;

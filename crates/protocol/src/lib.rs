@@ -17,6 +17,7 @@ mod fault;
 mod json_error;
 mod link;
 pub mod peer;
+mod sample;
 mod schema;
 
 pub use cell::{CellDocument, EdgeDocument, EvaluationDocument};
@@ -24,6 +25,9 @@ pub use error_code::ErrorCode;
 pub use fault::{FixDocument, QuarantineDocument};
 pub use json_error::json_error;
 pub use link::{AgilityDocument, CommandDocument, CoordinatorMessage, PoseDocument, VesselMessage};
+pub use sample::{
+    BeliefDocument, SampleDocument, SampleRefusalDocument, SamplesAnswerDocument, SamplesDocument,
+};
 
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};

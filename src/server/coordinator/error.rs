@@ -32,6 +32,12 @@ pub enum CoordinatorError {
          to a coordinator, `seacover serve`)"
     )]
     ReadOnly,
+    /// Samples sent to a coordinator that does not learn.
+    #[error(
+        "this coordinator does not learn the risk map: start it with a [learning] section in \
+         --config (docs/learning.md)"
+    )]
+    NotLearning,
 }
 
 impl CoordinatorError {
@@ -40,7 +46,9 @@ impl CoordinatorError {
         match self {
             CoordinatorError::Mission(e) => e.code(),
             CoordinatorError::Hello(_) => ErrorCode::Invalid,
-            CoordinatorError::Full(_) | CoordinatorError::ReadOnly => ErrorCode::Conflict,
+            CoordinatorError::Full(_)
+            | CoordinatorError::ReadOnly
+            | CoordinatorError::NotLearning => ErrorCode::Conflict,
             CoordinatorError::NoVessel(_) => ErrorCode::NotFound,
             CoordinatorError::Storage(_) => ErrorCode::Storage,
         }

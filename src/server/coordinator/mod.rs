@@ -24,6 +24,7 @@
 mod error;
 pub(super) mod history;
 mod judging;
+mod learning;
 mod requests;
 #[cfg(test)]
 mod tests;
@@ -57,6 +58,7 @@ use crate::protocol::{
 use crate::recorder::messages::{EventKind, EventRecord};
 use crate::recorder::{Entry as RecorderEntry, Recorder};
 pub(super) use error::CoordinatorError;
+pub use learning::LearnSettings;
 
 /// What links and handlers ask of the tick task.
 #[derive(Debug)]
@@ -93,6 +95,15 @@ pub enum Request {
     },
     /// A peer fleet's vessels' own neighbour counts (`serve --peer`).
     PeerNeighbours(BTreeMap<String, u32>),
+    /// `POST /api/v1/samples`: each sample judged on its own.
+    Samples {
+        samples: Vec<crate::protocol::SampleDocument>,
+        reply: oneshot::Sender<Result<crate::protocol::SamplesAnswerDocument, CoordinatorError>>,
+    },
+    /// `GET /api/v1/risk`: the density the fleet covers.
+    Belief {
+        reply: oneshot::Sender<crate::protocol::BeliefDocument>,
+    },
     /// An operator's change to the mission; the reply is the changed
     /// document's new state.
     Change {
@@ -161,6 +172,9 @@ pub(super) struct TickSettings {
     /// What a vessel's poses must keep to (per vessel; a refusal
     /// quarantines that vessel alone).
     pub limits: Limits,
+    /// Learn the risk map from samples (`[learning]`); `None`: samples are
+    /// refused and the mission's risk is covered.
+    pub learning: Option<LearnSettings>,
 }
 
 struct Link {
@@ -275,6 +289,8 @@ pub(super) struct Coordinator {
     /// it, a vessel that names another mission in its hello is held
     /// rather than re-tasked ([`judging::Standing::hold_stray`]).
     provisional: bool,
+    /// The learner, when the risk map is learned from samples.
+    learning: Option<learning::Learning>,
 }
 
 impl Coordinator {
@@ -319,6 +335,7 @@ impl Coordinator {
                 name,
                 mission,
                 provisional: false,
+                learning: settings.learning.map(learning::Learning::new),
             },
             rx,
         )
@@ -486,6 +503,21 @@ impl Coordinator {
             Request::Change { change, reply } => {
                 let outcome = self.change(&change);
                 let _ = reply.send(outcome);
+            }
+            Request::Samples { samples, reply } => {
+                let now = self.time();
+                let outcome = match &mut self.learning {
+                    Some(l) => Ok(l.take(samples, &self.mission, now)),
+                    None => Err(CoordinatorError::NotLearning),
+                };
+                let _ = reply.send(outcome);
+            }
+            Request::Belief { reply } => {
+                let doc = match &self.learning {
+                    Some(l) => l.document(&self.mission),
+                    None => learning::Learning::unlearned(&self.mission),
+                };
+                let _ = reply.send(doc);
             }
             Request::PeerNeighbours(counts) => {
                 for (id, n) in counts {

@@ -119,6 +119,9 @@ impl Coordinator {
             })?;
         }
         self.mission = next;
+        if let Some(l) = &mut self.learning {
+            l.mission_changed();
+        }
         let document = self.mission.document();
         self.name = mission_name(&document);
         let time = self.time();

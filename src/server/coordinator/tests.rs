@@ -11,6 +11,7 @@ fn coordinator(mission: &Mission) -> Coordinator {
         time_warp: 1.0,
         liveness: 3.0,
         limits: Limits::default(),
+        learning: None,
     };
     Coordinator::new(mission.clone(), settings, None).0
 }
@@ -214,6 +215,7 @@ fn the_watch_carries_a_bounded_history_from_the_first_tick() {
         time_warp: 1.0,
         liveness: 1e9,
         limits: Limits::default(),
+        learning: None,
     };
     let (mut c, snapshots) = Coordinator::new(mission.clone(), settings, None);
     let (pose_tx, _rx) = register(&mut c, "usv-1", 1);

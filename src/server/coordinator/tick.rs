@@ -32,6 +32,18 @@ fn send_command(
     }
 }
 
+/// The density the fleet covers: the learned belief once fitted, else the
+/// mission's risk.
+fn covered<'a>(
+    learning: &'a Option<super::learning::Learning>,
+    mission: &'a crate::mission::Mission,
+) -> &'a crate::coverage::RiskField {
+    learning
+        .as_ref()
+        .and_then(|l| l.belief())
+        .unwrap_or(mission.risk())
+}
+
 impl Coordinator {
     /// Takes every link's newest pose, if it has a new one, judged
     /// ([`judging`]).
@@ -116,6 +128,9 @@ impl Coordinator {
         written: mpsc::Sender<()>,
     ) -> Published {
         self.tick += advance;
+        if let Some(l) = &mut self.learning {
+            l.poll(&self.mission, self.tick as f64 / self.mission.tick_hz());
+        }
         self.collect_poses();
         self.hold_quarantined(due, &written);
         let time = self.tick as f64 / self.mission.tick_hz();
@@ -149,6 +164,7 @@ impl Coordinator {
             })
             .collect();
         let mission = &self.mission;
+        let risk = covered(&self.learning, mission);
         let options = Options {
             parallel: true,
             ..Options::default()
@@ -169,14 +185,7 @@ impl Coordinator {
                    (near, scratch): &mut (Vec<usize>, Scratch)|
          -> (CellResult, bool) {
             let vessel = &fleet.vessels()[i];
-            let cell = cell_figures(
-                mission.region(),
-                mission.risk(),
-                vessel,
-                geometry,
-                &options,
-                near,
-            );
+            let cell = cell_figures(mission.region(), risk, vessel, geometry, &options, near);
             let sc = layer.command(&safety, i, &states[i], &cell, &mut entry.guidance, scratch);
             let (cmd, c) = (sc.command, cell.centroid);
             let doc = CommandDocument {
@@ -285,7 +294,7 @@ impl Coordinator {
         let fleet = self.fleet(live)?;
         Some(evaluate(
             self.mission.region(),
-            self.mission.risk(),
+            covered(&self.learning, &self.mission),
             &fleet,
             &Options {
                 parallel: true,

@@ -114,6 +114,7 @@ pub(crate) async fn run(args: Args) -> anyhow::Result<()> {
         data_dir: Some(args.data_dir),
         write_rate: settings.write_rate,
         write_burst: settings.write_burst,
+        learning: settings.learning,
         record,
         mission_source,
         peer: args.peer.then(|| {

@@ -1,0 +1,381 @@
+//! Learning the risk map in the coordinator (docs/learning.md): samples
+//! judged per vessel, a window of the newest, fits on a thread of their
+//! own beside the tick, and the belief the fleet covers.
+//!
+//! Invariants:
+//! - a refused sample is never learned from; each refusal is answered by
+//!   its index and code, and counted by code in
+//!   `seacover_samples_total{outcome}`;
+//! - one vessel's flood is refused for that vessel alone (a token bucket
+//!   each, in mission time);
+//! - memory is bounded: at most [`WINDOW`] samples (the newest) and
+//!   [`MAX_SOURCES`] buckets;
+//! - the tick never waits on a fit: a fit runs on the learner's thread
+//!   and its belief is taken up by the first tick after it ends; the
+//!   mission's own risk is covered until the first fit, and is the fit's
+//!   prior.
+
+use std::collections::{HashMap, VecDeque};
+use std::sync::mpsc;
+
+use crate::coverage::RiskField;
+use crate::geometry::Point;
+use crate::learning::{Lattice, Learner, Params, Sample};
+use crate::mission::Mission;
+use crate::protocol::{
+    BeliefDocument, RiskDocument, RiskObjectDocument, SampleDocument, SampleRefusalDocument,
+    SamplesAnswerDocument,
+};
+
+/// The newest samples the learner keeps.
+const WINDOW: usize = 20_000;
+/// Vessels (sample sources) whose rate is tracked at once.
+const MAX_SOURCES: usize = 4_096;
+/// A vessel's samples per mission second, and its burst.
+const RATE: f64 = 20.0;
+const BURST: f64 = 200.0;
+/// Samples this far outside the region's bounding box are refused [m].
+const MARGIN: f64 = 50.0;
+/// Samples older than this are refused as stale [mission s].
+const MAX_AGE: f64 = 600.0;
+/// Samples from later than this ahead of the mission's clock are refused
+/// as from the future [mission s].
+const MAX_AHEAD: f64 = 5.0;
+
+/// `[learning]` of `serve --config`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LearnSettings {
+    /// Optimism: posterior standard deviations added (0: the mean).
+    pub kappa: f64,
+    /// Mission seconds between fits.
+    pub refit: f64,
+    /// The lattice's spacing and each Gaussian's spread [m].
+    pub lattice: f64,
+}
+
+impl Default for LearnSettings {
+    fn default() -> Self {
+        LearnSettings {
+            kappa: 0.0,
+            refit: 5.0,
+            lattice: 10.0,
+        }
+    }
+}
+
+/// A vessel's token bucket.
+#[derive(Debug, Clone, Copy)]
+struct Bucket {
+    tokens: f64,
+    at: f64,
+}
+
+/// What the learner's thread is asked to fit.
+struct Job {
+    lattice: Lattice,
+    prior: RiskField,
+    samples: Vec<Sample>,
+    kappa: f64,
+    at: f64,
+}
+
+/// A fit's result.
+struct Fitted {
+    density: RiskField,
+    at: f64,
+}
+
+/// The learner's thread: one fit at a time.
+struct Worker {
+    jobs: Option<mpsc::SyncSender<Job>>,
+    results: mpsc::Receiver<Fitted>,
+    busy: bool,
+    thread: Option<std::thread::JoinHandle<()>>,
+}
+
+impl Worker {
+    fn start() -> Worker {
+        let (jobs, inbox) = mpsc::sync_channel::<Job>(1);
+        let (done, results) = mpsc::channel();
+        let thread = std::thread::Builder::new()
+            .name("seacover-learner".into())
+            .spawn(move || {
+                while let Ok(job) = inbox.recv() {
+                    let params = Params::new(1.0, 1.0, 5.0).expect("valid spreads");
+                    let mut learner = Learner::new(job.lattice, job.prior, params);
+                    for s in job.samples {
+                        learner.add(s);
+                    }
+                    let density = learner.fit().density(job.kappa);
+                    if done
+                        .send(Fitted {
+                            density,
+                            at: job.at,
+                        })
+                        .is_err()
+                    {
+                        return;
+                    }
+                }
+            })
+            .expect("a thread for the learner");
+        Worker {
+            jobs: Some(jobs),
+            results,
+            busy: false,
+            thread: Some(thread),
+        }
+    }
+}
+
+impl Drop for Worker {
+    /// Ends the thread once its fit (if any) is done.
+    fn drop(&mut self) {
+        self.jobs = None;
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+/// The coordinator's learner.
+pub(super) struct Learning {
+    settings: LearnSettings,
+    window: VecDeque<Sample>,
+    buckets: HashMap<String, Bucket>,
+    worker: Worker,
+    belief: Option<RiskField>,
+    fits: u64,
+    fitted_at: Option<f64>,
+    next_fit: f64,
+    /// Samples taken since the newest fit began.
+    fresh: bool,
+}
+
+impl Learning {
+    pub(super) fn new(settings: LearnSettings) -> Learning {
+        Learning {
+            settings,
+            window: VecDeque::new(),
+            buckets: HashMap::new(),
+            worker: Worker::start(),
+            belief: None,
+            fits: 0,
+            fitted_at: None,
+            next_fit: 0.0,
+            fresh: false,
+        }
+    }
+
+    /// The density the fleet covers, once a fit has come.
+    pub(super) fn belief(&self) -> Option<&RiskField> {
+        self.belief.as_ref()
+    }
+
+    /// The mission changed its region or risk: the belief is fitted again
+    /// with the new prior and lattice before it is covered.
+    pub(super) fn mission_changed(&mut self) {
+        self.belief = None;
+        self.fresh = !self.window.is_empty();
+        self.next_fit = 0.0;
+    }
+
+    /// Judges a batch at mission time `now`; takes the good samples.
+    pub(super) fn take(
+        &mut self,
+        batch: Vec<SampleDocument>,
+        mission: &Mission,
+        now: f64,
+    ) -> SamplesAnswerDocument {
+        let (min, max) = mission.region().bounds();
+        let mut answer = SamplesAnswerDocument {
+            accepted: 0,
+            refused: Vec::new(),
+        };
+        for (index, s) in batch.into_iter().enumerate() {
+            match self.judge(&s, (min, max), now) {
+                Ok(sample) => {
+                    self.window.push_back(sample);
+                    if self.window.len() > WINDOW {
+                        self.window.pop_front();
+                    }
+                    self.fresh = true;
+                    answer.accepted += 1;
+                    metrics::counter!(crate::server::metrics::SAMPLES, "outcome" => "accepted")
+                        .increment(1);
+                }
+                Err((code, reason)) => {
+                    metrics::counter!(crate::server::metrics::SAMPLES, "outcome" => code)
+                        .increment(1);
+                    answer.refused.push(SampleRefusalDocument {
+                        index: index as u64,
+                        code: code.to_string(),
+                        reason,
+                    });
+                }
+            }
+        }
+        if !answer.refused.is_empty() {
+            tracing::debug!(
+                refused = answer.refused.len(),
+                first = %answer.refused[0].reason,
+                "samples refused"
+            );
+        }
+        answer
+    }
+
+    fn judge(
+        &mut self,
+        s: &SampleDocument,
+        (min, max): (Point, Point),
+        now: f64,
+    ) -> Result<Sample, (&'static str, String)> {
+        if !crate::mission::scenario::valid_id(&s.vessel) {
+            return Err((
+                "invalid",
+                "vessel: must match [A-Za-z0-9_.-]{1,64}".to_string(),
+            ));
+        }
+        let sample = Sample::new(Point { x: s.x, y: s.y }, s.value, s.sd)
+            .map_err(|e| ("invalid", e.to_string()))?;
+        if !s.t.is_finite() {
+            return Err(("invalid", "t: must be finite".to_string()));
+        }
+        let outside = (min.x - s.x)
+            .max(s.x - max.x)
+            .max(min.y - s.y)
+            .max(s.y - max.y);
+        if outside > MARGIN {
+            return Err((
+                "outside_region",
+                format!("({}, {}) is {outside:.0} m outside the region", s.x, s.y),
+            ));
+        }
+        if s.t > now + MAX_AHEAD {
+            return Err((
+                "future",
+                format!("t {} is ahead of the mission's clock, {now:.1} s", s.t),
+            ));
+        }
+        if s.t < now - MAX_AGE {
+            return Err((
+                "stale",
+                format!("t {} is older than {MAX_AGE} s at {now:.1} s", s.t),
+            ));
+        }
+        if !self.spend(&s.vessel, now) {
+            return Err((
+                "flood",
+                format!("{}: over {RATE} samples a second", s.vessel),
+            ));
+        }
+        Ok(sample)
+    }
+
+    /// One token from `vessel`'s bucket, if it has one.
+    fn spend(&mut self, vessel: &str, now: f64) -> bool {
+        if !self.buckets.contains_key(vessel) && self.buckets.len() >= MAX_SOURCES {
+            // Forget the sources whose buckets have filled again: they are
+            // as if new.
+            self.buckets
+                .retain(|_, b| b.tokens + (now - b.at).max(0.0) * RATE < BURST);
+            if self.buckets.len() >= MAX_SOURCES {
+                return false;
+            }
+        }
+        let b = self.buckets.entry(vessel.to_string()).or_insert(Bucket {
+            tokens: BURST,
+            at: now,
+        });
+        b.tokens = (b.tokens + (now - b.at).max(0.0) * RATE).min(BURST);
+        b.at = b.at.max(now);
+        if b.tokens < 1.0 {
+            return false;
+        }
+        b.tokens -= 1.0;
+        true
+    }
+
+    /// At mission time `now`: takes a finished fit, and starts one when
+    /// due and new samples have come.
+    pub(super) fn poll(&mut self, mission: &Mission, now: f64) {
+        while let Ok(fitted) = self.worker.results.try_recv() {
+            self.worker.busy = false;
+            self.belief = Some(fitted.density);
+            self.fits += 1;
+            self.fitted_at = Some(fitted.at);
+            metrics::counter!(crate::server::metrics::FITS).increment(1);
+        }
+        if self.worker.busy || !self.fresh || now < self.next_fit {
+            return;
+        }
+        let (min, max) = mission.region().bounds();
+        let Ok(lattice) = Lattice::over(min, max, self.settings.lattice) else {
+            // Validated at start-up for the mission's region; a region
+            // changed since to one too large for the lattice keeps the
+            // mission's own risk.
+            return;
+        };
+        let job = Job {
+            lattice,
+            prior: mission.risk().clone(),
+            samples: self.window.iter().copied().collect(),
+            kappa: self.settings.kappa,
+            at: now,
+        };
+        if let Some(jobs) = &self.worker.jobs
+            && jobs.try_send(job).is_ok()
+        {
+            self.worker.busy = true;
+            self.fresh = false;
+            self.next_fit = now + self.settings.refit;
+        }
+    }
+
+    /// `GET /api/v1/risk` without learning: the mission's risk.
+    pub(super) fn unlearned(mission: &Mission) -> BeliefDocument {
+        BeliefDocument {
+            source: "mission".to_string(),
+            risk: mission.document().risk,
+            samples: 0,
+            fits: 0,
+            fitted_at: None,
+            kappa: 0.0,
+        }
+    }
+
+    /// `GET /api/v1/risk`: the density covered and the learner's state.
+    pub(super) fn document(&self, mission: &Mission) -> BeliefDocument {
+        let (source, risk) = match &self.belief {
+            Some(b) => ("learned", risk_document(b)),
+            None => ("mission", mission.document().risk),
+        };
+        BeliefDocument {
+            source: source.to_string(),
+            risk,
+            samples: self.window.len() as u64,
+            fits: self.fits,
+            fitted_at: self.fitted_at,
+            kappa: self.settings.kappa,
+        }
+    }
+}
+
+/// A density as a mission's risk document (objects without ids).
+pub(super) fn risk_document(field: &RiskField) -> RiskDocument {
+    RiskDocument {
+        base: field.base(),
+        objects: field
+            .objects()
+            .iter()
+            .map(|o| RiskObjectDocument {
+                id: None,
+                x: o.center.x,
+                y: o.center.y,
+                alpha: o.alpha,
+                sigma: o.sigma,
+            })
+            .collect(),
+    }
+}

@@ -1,0 +1,237 @@
+//! A coordinator that learns the risk map (docs/learning.md, "In the
+//! coordinator"): the real `seacover serve` with a `[learning]` section, a
+//! flat mission risk as the prior, samples of the paper's map posted by a
+//! survey over REST, and one vessel on a real link. Checked: the belief
+//! `GET /api/v1/risk` answers is the map (within 10 % at its peaks), the
+//! vessel's commanded centroid moves to where the map says, each bad sample
+//! is refused alone with its code and counted, and a coordinator without
+//! `[learning]` refuses samples with 409.
+
+use std::io::Write;
+use std::process::Stdio;
+
+use futures_util::SinkExt;
+use serde_json::{Value, json};
+use tokio_tungstenite::tungstenite::Message;
+
+use crate::common::process::KillOnDrop;
+use crate::common::server::{get_json, metric_sum, metrics, serve_command, start};
+
+/// The paper's map, Φ(x, y) = 0.1 + Σ α exp(−d² / 2σ²), σ = 10 m.
+fn truth(x: f64, y: f64) -> f64 {
+    let g = |cx: f64, cy: f64, a: f64| a * (-((x - cx).powi(2) + (y - cy).powi(2)) / 200.0).exp();
+    0.1 + g(25.0, 70.0, 10.0) + g(70.0, 75.0, 13.0) + g(60.0, 25.0, 8.0)
+}
+
+/// A density document's value at (x, y).
+fn value(risk: &Value, x: f64, y: f64) -> f64 {
+    let objects = risk["objects"].as_array().unwrap();
+    risk["base"].as_f64().unwrap()
+        + objects
+            .iter()
+            .map(|o| {
+                let f = |k: &str| o[k].as_f64().unwrap();
+                let d2 = (x - f("x")).powi(2) + (y - f("y")).powi(2);
+                f("alpha") * (-d2 / (2.0 * f("sigma").powi(2))).exp()
+            })
+            .sum::<f64>()
+}
+
+fn serve(config: &str, learning: bool) -> (KillOnDrop, String, tempfile::TempDir) {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("seacover.toml");
+    let mut f = std::fs::File::create(&file).unwrap();
+    f.write_all(config.as_bytes()).unwrap();
+    if learning {
+        f.write_all(b"\n[learning]\nrefit = 1.0\n").unwrap();
+    }
+    let mut command = serve_command(&dir.path().join("data"), &file);
+    command.arg("--no-record").stderr(Stdio::null());
+    let (child, addr) = start(command);
+    (KillOnDrop(child), addr, dir)
+}
+
+const FLAT: &str = "[risk]\nbase = 0.1\nobjects = []\n";
+
+async fn post(http: &reqwest::Client, addr: &str, samples: Value) -> (u16, Value) {
+    let r = http
+        .post(format!("http://{addr}/api/v1/samples"))
+        .json(&json!({ "samples": samples }))
+        .send()
+        .await
+        .unwrap();
+    (r.status().as_u16(), r.json().await.unwrap())
+}
+
+async fn mission_time(http: &reqwest::Client, addr: &str) -> f64 {
+    let c: Value = get_json(http, &format!("http://{addr}/api/v1/coverage")).await;
+    c["time"].as_f64().unwrap()
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_coordinator_learns_the_map_from_posted_samples() {
+    let (_server, addr, _dir) = serve(FLAT, true);
+    let http = reqwest::Client::new();
+    let risk_url = format!("http://{addr}/api/v1/risk");
+    let before: Value = get_json(&http, &risk_url).await;
+    assert_eq!(before["source"], "mission", "{before}");
+    assert_eq!(before["fits"], 0);
+
+    // One vessel at the square's centre, on a real link: its centroid.
+    let ws = format!("ws://{addr}/api/v1/vessels/link");
+    let (mut sink, mut stream) = crate::common::link::hello(ws, "usv-1").await;
+    let pose = json!({"type": "pose", "t": 0, "x": 50, "y": 50, "psi": 0, "u": 0, "v": 0, "r": 0});
+    let centroid = async |sink: &mut _, stream: &mut _| loop {
+        SinkExt::send(sink, Message::text(pose.to_string()))
+            .await
+            .ok()
+            .unwrap();
+        let frame = crate::common::link::next_json(stream).await;
+        if frame["type"] == "command" {
+            let c = &frame["centroid"];
+            break (c[0].as_f64().unwrap(), c[1].as_f64().unwrap());
+        }
+    };
+    let flat = centroid(&mut sink, &mut stream).await;
+    assert!(
+        (flat.0 - 50.0).abs() < 0.5 && (flat.1 - 50.0).abs() < 0.5,
+        "over a flat map the centroid is the centre: {flat:?}"
+    );
+
+    // A survey every 5 m, one source per row (21 samples each, under its
+    // burst), noise-free with σ 0.1.
+    let t = mission_time(&http, &addr).await;
+    for row in 0..=20 {
+        let y = 5.0 * f64::from(row);
+        let samples: Vec<Value> = (0..=20)
+            .map(|i| {
+                let x = 5.0 * f64::from(i);
+                json!({"vessel": format!("survey-{row}"), "t": t, "x": x, "y": y,
+                       "value": truth(x, y), "sd": 0.1})
+            })
+            .collect();
+        let (status, answer) = post(&http, &addr, Value::from(samples)).await;
+        assert_eq!(status, 200, "{answer}");
+        assert_eq!(answer["accepted"], 21, "{answer}");
+    }
+    let deadline = tokio::time::Instant::now() + std::time::Duration::from_secs(20);
+    let learned = loop {
+        let risk: Value = get_json(&http, &risk_url).await;
+        if risk["source"] == "learned" {
+            break risk;
+        }
+        assert!(
+            tokio::time::Instant::now() < deadline,
+            "no fit in 20 s: {risk}"
+        );
+        tokio::time::sleep(std::time::Duration::from_millis(100)).await;
+    };
+    assert_eq!(learned["samples"], 441, "{learned}");
+    for (x, y) in [(25.0, 70.0), (70.0, 75.0), (60.0, 25.0), (5.0, 5.0)] {
+        let (got, want) = (value(&learned["risk"], x, y), truth(x, y));
+        assert!(
+            (got - want).abs() <= 0.1 * want.max(1.0),
+            "belief at ({x}, {y}): {got} against {want}"
+        );
+    }
+    // The vessel now covers the map: its centroid moves towards the
+    // heaviest object, north-east of the centre.
+    let mut moved = flat;
+    for _ in 0..50 {
+        moved = centroid(&mut sink, &mut stream).await;
+        if moved.1 > 55.0 {
+            break;
+        }
+    }
+    assert!(
+        moved.1 > 55.0 && (moved.0 - flat.0).abs() + (moved.1 - flat.1).abs() > 5.0,
+        "centroid over the learned map {moved:?}, over the flat one {flat:?}"
+    );
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn each_bad_sample_is_refused_alone_and_counted() {
+    let (_server, addr, _dir) = serve(FLAT, true);
+    let http = reqwest::Client::new();
+    let t = mission_time(&http, &addr).await;
+    let s = |vessel: &str, t: f64, x: f64, value: f64, sd: f64| json!({"vessel": vessel, "t": t, "x": x, "y": 50, "value": value, "sd": sd});
+    let batch = json!([
+        s("a", t, 50.0, 1.0, 0.1),
+        s("a", t, 50.0, 1e300, 0.1),
+        s("a", t, 50.0, 1.0, 0.0),
+        s("a", t, 400.0, 1.0, 0.1),
+        s("a", t + 60.0, 50.0, 1.0, 0.1),
+        s("a", t - 3600.0, 50.0, 1.0, 0.1),
+        s("bad id!", t, 50.0, 1.0, 0.1),
+        s("b", t, 50.0, 1.0, 0.1),
+    ]);
+    let (status, answer) = post(&http, &addr, batch).await;
+    assert_eq!(status, 200, "{answer}");
+    assert_eq!(answer["accepted"], 2, "{answer}");
+    let codes: Vec<(u64, &str)> = answer["refused"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| (r["index"].as_u64().unwrap(), r["code"].as_str().unwrap()))
+        .collect();
+    assert_eq!(
+        codes,
+        [
+            (1, "invalid"),
+            (2, "invalid"),
+            (3, "outside_region"),
+            (4, "future"),
+            (5, "stale"),
+            (6, "invalid")
+        ],
+        "{answer}"
+    );
+    // A flood from one source is refused for that source alone.
+    let flood: Vec<Value> = (0..300).map(|_| s("loud", t, 50.0, 1.0, 0.1)).collect();
+    let (_, answer) = post(&http, &addr, Value::from(flood)).await;
+    let floods = answer["refused"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|r| r["code"] == "flood")
+        .count();
+    assert_eq!(answer["accepted"], 200, "the burst");
+    assert_eq!(floods, 100);
+    let (_, answer) = post(&http, &addr, json!([s("quiet", t, 50.0, 1.0, 0.1)])).await;
+    assert_eq!(answer["accepted"], 1, "another source is not held back");
+    let text = metrics(&http, &addr).await;
+    for (label, n) in [
+        ("accepted", 203.0),
+        ("invalid", 3.0),
+        ("outside_region", 1.0),
+        ("future", 1.0),
+        ("stale", 1.0),
+        ("flood", 100.0),
+    ] {
+        let got = metric_sum(&text, "seacover_samples_total", &format!("\"{label}\""));
+        assert_eq!(got, n, "seacover_samples_total{{outcome={label:?}}}");
+    }
+    // Too large a batch is refused whole.
+    let many: Vec<Value> = (0..1001).map(|_| s("a", t, 50.0, 1.0, 0.1)).collect();
+    let (status, _) = post(&http, &addr, Value::from(many)).await;
+    assert_eq!(status, 422);
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_coordinator_that_does_not_learn_refuses_samples() {
+    let (_server, addr, _dir) = serve(FLAT, false);
+    let http = reqwest::Client::new();
+    let sample = json!([{"vessel": "a", "t": 0, "x": 1, "y": 1, "value": 1, "sd": 1}]);
+    let (status, answer) = post(&http, &addr, sample).await;
+    assert_eq!(status, 409, "{answer}");
+    assert!(
+        answer["error"]["message"]
+            .as_str()
+            .unwrap()
+            .contains("[learning]"),
+        "{answer}"
+    );
+    let risk: Value = get_json(&http, &format!("http://{addr}/api/v1/risk")).await;
+    assert_eq!(risk["source"], "mission");
+    assert_eq!(risk["risk"]["base"], 0.1);
+}
