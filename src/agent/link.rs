@@ -25,7 +25,8 @@ use tokio_tungstenite::tungstenite::Message;
 use tokio_util::sync::CancellationToken;
 
 use crate::protocol::{
-    AgilityDocument, CommandDocument, CoordinatorMessage, PoseDocument, VesselMessage,
+    AgilityDocument, CommandDocument, CoordinatorMessage, LinkSampleDocument, PoseDocument,
+    VesselMessage,
 };
 
 /// What the link hands the vessel.
@@ -230,6 +231,7 @@ pub enum LinkError {
 pub async fn run(
     config: LinkConfig,
     mut poses: watch::Receiver<Option<PoseDocument>>,
+    mut samples: Option<mpsc::Receiver<LinkSampleDocument>>,
     commands: mpsc::Sender<Inbound>,
     shutdown: CancellationToken,
 ) -> Result<(), LinkError> {
@@ -290,6 +292,7 @@ pub async fn run(
         let link = Connected {
             config: &config,
             poses: &mut poses,
+            samples: &mut samples,
             commands: &commands,
             shutdown: &shutdown,
             following: &mut following,
@@ -310,6 +313,16 @@ pub async fn run(
         }
     }
     Ok(())
+}
+
+/// The next sample, or never when the vessel takes none.
+async fn next_sample(
+    samples: &mut Option<mpsc::Receiver<LinkSampleDocument>>,
+) -> Option<LinkSampleDocument> {
+    match samples {
+        Some(r) => r.recv().await,
+        None => std::future::pending().await,
+    }
 }
 
 /// Says why a handshake failed; an error once the token has been refused
@@ -363,6 +376,8 @@ enum Ended {
 struct Connected<'a> {
     config: &'a LinkConfig,
     poses: &'a mut watch::Receiver<Option<PoseDocument>>,
+    /// The vessel's samples of the risk field, if it takes any.
+    samples: &'a mut Option<mpsc::Receiver<LinkSampleDocument>>,
     commands: &'a mpsc::Sender<Inbound>,
     shutdown: &'a CancellationToken,
     following: &'a mut Option<String>,
@@ -394,6 +409,13 @@ impl Connected<'_> {
                         return Ended::Lost;
                     }
                 }
+                sample = next_sample(self.samples) => match sample {
+                    Some(s) => if sink.send(text(&VesselMessage::Sample(s))).await.is_err() {
+                        return Ended::Lost;
+                    },
+                    // The vessel takes no more samples.
+                    None => *self.samples = None,
+                },
                 frame = stream.next() => match frame {
                     Some(Ok(Message::Text(t))) => match serde_json::from_str::<CoordinatorMessage>(&t) {
                         Ok(CoordinatorMessage::Command(c)) => {

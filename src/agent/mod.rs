@@ -249,6 +249,7 @@ async fn run_vessel(
             station_radius: None,
         },
         pose_slot,
+        None,
         commands,
         shutdown.clone(),
     ));

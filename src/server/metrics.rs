@@ -35,7 +35,9 @@ pub const MESSAGES_REJECTED: &str = "seacover_messages_rejected_total";
 /// `time_backwards`, `outside_region`, `too_fast`, `jump`, `fix`).
 pub const POSES_REFUSED: &str = "seacover_poses_refused_total";
 /// Samples of the risk field, by outcome (`accepted`, or the refusal's
-/// code: `invalid`, `outside_region`, `stale`, `future`, `flood`).
+/// code: `invalid`, `outside_region`, `stale`, `future`, `flood`; on a
+/// vessel link also `unplaced`, a vessel whose poses are refused, and
+/// `dropped`, the coordinator's queue full).
 pub const SAMPLES: &str = "seacover_samples_total";
 /// Fits of the learned risk map.
 pub const FITS: &str = "seacover_learning_fits_total";

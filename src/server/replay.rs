@@ -341,7 +341,10 @@ async fn refuse_writes(mut requests: mpsc::Receiver<Request>, shutdown: Cancella
             }
             // Unanswered: the handler then answers the recorded mission's
             // risk.
-            Request::Belief { .. } | Request::Gone { .. } | Request::PeerNeighbours(_) => {}
+            Request::Belief { .. }
+            | Request::LinkSample { .. }
+            | Request::Gone { .. }
+            | Request::PeerNeighbours(_) => {}
         }
     }
 }

@@ -268,6 +268,7 @@ async fn read_hello(
             }
         }
         Ok(VesselMessage::Pose(_)) => (None, "protocol", "a pose before hello".into()),
+        Ok(VesselMessage::Sample(_)) => (None, "protocol", "a sample before hello".into()),
         Err(e) => (
             None,
             "malformed",
@@ -501,6 +502,19 @@ impl Reader<'_> {
             ),
             Ok(VesselMessage::Hello { .. }) => {
                 rejected(app, peer, Some(id), "protocol", "hello twice on one link")
+            }
+            Ok(VesselMessage::Sample(s)) => {
+                // Judged by the tick task, which answers a refusal on this
+                // link; a full queue drops it, counted.
+                let request = Request::LinkSample {
+                    vessel: self.vessel.to_string(),
+                    sample: s,
+                };
+                if app.requests.try_send(request).is_err() {
+                    metrics::counter!(crate::server::metrics::SAMPLES, "outcome" => "dropped")
+                        .increment(1);
+                }
+                return Flow::Go;
             }
             Err(e) => {
                 self.garbage += 1;

@@ -235,3 +235,53 @@ async fn a_coordinator_that_does_not_learn_refuses_samples() {
     assert_eq!(risk["source"], "mission");
     assert_eq!(risk["risk"]["base"], 0.1);
 }
+
+/// Samples on the vessel link: placed where the vessel is, refused while
+/// none of its poses is believed (answered on the link, which stays open),
+/// taken once one is.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn samples_on_the_vessel_link_are_taken_once_the_vessel_is_placed() {
+    let (_server, addr, _dir) = serve(FLAT, true);
+    let http = reqwest::Client::new();
+    let ws = format!("ws://{addr}/api/v1/vessels/link");
+    let (mut sink, mut stream) = crate::common::link::hello(ws, "usv-1").await;
+    let sample = json!({"type": "sample", "x": 50, "y": 50, "value": 2.5, "sd": 0.1});
+    sink.send(Message::text(sample.to_string()))
+        .await
+        .ok()
+        .unwrap();
+    let error = crate::common::link::next_json(&mut stream).await;
+    assert_eq!(error["type"], "error", "{error}");
+    assert_eq!(error["code"], "sample_unplaced", "{error}");
+    let pose = json!({"type": "pose", "t": 0, "x": 50, "y": 50, "psi": 0, "u": 0, "v": 0, "r": 0});
+    loop {
+        sink.send(Message::text(pose.to_string()))
+            .await
+            .ok()
+            .unwrap();
+        let frame = crate::common::link::next_json(&mut stream).await;
+        assert!(!frame.is_null(), "the link stays open");
+        if frame["type"] == "command" {
+            break;
+        }
+    }
+    sink.send(Message::text(sample.to_string()))
+        .await
+        .ok()
+        .unwrap();
+    let risk_url = format!("http://{addr}/api/v1/risk");
+    let deadline = tokio::time::Instant::now() + std::time::Duration::from_secs(10);
+    loop {
+        let risk: Value = get_json(&http, &risk_url).await;
+        if risk["samples"] == 1 {
+            break;
+        }
+        assert!(tokio::time::Instant::now() < deadline, "{risk}");
+        tokio::time::sleep(std::time::Duration::from_millis(50)).await;
+    }
+    let text = metrics(&http, &addr).await;
+    assert_eq!(
+        metric_sum(&text, "seacover_samples_total", "\"unplaced\""),
+        1.0
+    );
+}

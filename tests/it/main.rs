@@ -13,6 +13,7 @@ mod api_docs;
 mod architecture;
 mod ardupilot_peer;
 mod ardupilot_quiet;
+mod ardupilot_samples;
 mod ardupilot_sitl;
 mod cli;
 mod curved;

@@ -24,7 +24,10 @@ pub use cell::{CellDocument, EdgeDocument, EvaluationDocument};
 pub use error_code::ErrorCode;
 pub use fault::{FixDocument, QuarantineDocument};
 pub use json_error::json_error;
-pub use link::{AgilityDocument, CommandDocument, CoordinatorMessage, PoseDocument, VesselMessage};
+pub use link::{
+    AgilityDocument, CommandDocument, CoordinatorMessage, LinkSampleDocument, PoseDocument,
+    VesselMessage,
+};
 pub use sample::{
     BeliefDocument, SampleDocument, SampleRefusalDocument, SamplesAnswerDocument, SamplesDocument,
 };

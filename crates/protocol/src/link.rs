@@ -62,6 +62,22 @@ pub enum VesselMessage {
     },
     /// A pose report.
     Pose(PoseDocument),
+    /// A measurement of the risk field by this vessel, taken when sent
+    /// (the coordinator stamps it with its mission time; docs/learning.md).
+    Sample(LinkSampleDocument),
+}
+
+/// A sample on the vessel link: where and what, the vessel being the
+/// link's.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
+pub struct LinkSampleDocument {
+    /// Where, in the mission's plane [m].
+    pub x: f64,
+    pub y: f64,
+    /// The value measured, in the risk density's units.
+    pub value: f64,
+    /// Its standard deviation σ > 0, in the same units.
+    pub sd: f64,
 }
 
 /// A pose report: the vessel's own clock, pose and body velocities.

@@ -38,6 +38,7 @@ use tokio_util::task::TaskTracker;
 use super::link::{self, LinkConfig};
 use crate::geometry::geodesy::{LatLon, LocalFrame};
 use crate::protocol::{MissionDocument, OriginDocument};
+pub use vehicle::SampleSource;
 use vehicle::{Refusal, Vehicle};
 
 /// A vehicle whose HEARTBEAT has not been heard for this long is lost: the
@@ -58,6 +59,9 @@ pub struct BridgeConfig {
     /// loiter) once within this of its goal [m]; `None`: the coordinator
     /// steers it to the end.
     pub station_radius: Option<f64>,
+    /// NAMED_VALUE_FLOATs of this name are samples of the risk field
+    /// (docs/learning.md), sent over each boat's link.
+    pub sample: Option<vehicle::SampleSource>,
     pub token: Option<String>,
     /// The vessel id of the only vehicle (instead of `mav-<sysid>`).
     pub id: Option<String>,
@@ -121,6 +125,8 @@ pub struct Tally {
     pub far_from_origin: AtomicU64,
     /// Attitudes with a non-finite yaw or yaw rate.
     pub invalid_attitude: AtomicU64,
+    /// Samples with a non-finite value or before any position.
+    pub invalid_sample: AtomicU64,
     /// Vehicles beyond the first when `--id` names one.
     pub extra_vehicles: AtomicU64,
 }
@@ -131,11 +137,12 @@ impl Tally {
             Refusal::InvalidPosition => &self.invalid_position,
             Refusal::FarFromOrigin => &self.far_from_origin,
             Refusal::InvalidAttitude => &self.invalid_attitude,
+            Refusal::InvalidSample => &self.invalid_sample,
         };
         counter.fetch_add(1, Ordering::Relaxed);
     }
 
-    fn counts(&self) -> [(&'static str, u64); 7] {
+    fn counts(&self) -> [(&'static str, u64); 8] {
         let get = |c: &AtomicU64| c.load(Ordering::Relaxed);
         [
             ("undecodable", get(&self.undecodable)),
@@ -144,6 +151,7 @@ impl Tally {
             ("invalid_position", get(&self.invalid_position)),
             ("far_from_origin", get(&self.far_from_origin)),
             ("invalid_attitude", get(&self.invalid_attitude)),
+            ("invalid_sample", get(&self.invalid_sample)),
             ("extra_vehicles", get(&self.extra_vehicles)),
         ]
     }
@@ -430,7 +438,8 @@ fn route(
     let _ = tx.try_send(m.message.clone());
     tasks.spawn(run_vehicle(
         Vehicle::new(sysid, m.header.component_id, *frame.borrow(), config.arm)
-            .holding_station(config.station_radius),
+            .holding_station(config.station_radius)
+            .sampling(config.sample.clone()),
         LinkConfig {
             url: url.to_string(),
             token: config.token.clone(),
@@ -505,6 +514,10 @@ async fn run_vehicle(
     let stop = shutdown.child_token();
     let (poses, pose_slot) = watch::channel(None);
     let (commands_tx, mut commands) = mpsc::channel(4);
+    // Samples wait for the link in a short queue; a full one drops them
+    // (the coordinator's learner wants many, not every one).
+    let (samples, sample_queue) = mpsc::channel(64);
+    let mut sample_queue = Some(sample_queue);
     // The link opens with the first valid pose: a "vehicle" that never
     // gives one (a spoofed heartbeat, a boat without a position) never
     // appears at the coordinator.
@@ -529,11 +542,12 @@ async fn run_vehicle(
                             if pose.is_some() {
                                 poses.send_replace(pose);
                                 if let Some((config, slot, tx)) = link.take() {
+                                    let sample_queue = sample_queue.take();
                                     link_task = Some(match &peer {
                                         None => {
                                             let (tally, shutdown, stop) = (tally.clone(), shutdown.clone(), stop.clone());
                                             tokio::spawn(async move {
-                                                if let Err(e) = link::run(config, slot, tx, stop).await {
+                                                if let Err(e) = link::run(config, slot, sample_queue, tx, stop).await {
                                                     tally.given_up.lock().expect("tally lock").get_or_insert(e);
                                                     shutdown.cancel();
                                                 }
@@ -551,6 +565,14 @@ async fn run_vehicle(
                     MavMessage::GPS_RAW_INT(g) => { v.on_gps(&g); Vec::new() }
                     MavMessage::EKF_STATUS_REPORT(e) => { v.on_ekf_status(&e); Vec::new() }
                     MavMessage::SYS_STATUS(s) => { v.on_sys_status(&s); Vec::new() }
+                    MavMessage::NAMED_VALUE_FLOAT(d) => {
+                        match v.on_named_value(&d) {
+                            Ok(Some(s)) => { let _ = samples.try_send(s); }
+                            Ok(None) => {}
+                            Err(r) => tally.refused(r),
+                        }
+                        Vec::new()
+                    }
                     _ => Vec::new(),
                 }
             }

@@ -31,13 +31,13 @@
 use mavlink::dialects::ardupilotmega::{
     ATTITUDE_DATA, COMMAND_LONG_DATA, EKF_STATUS_REPORT_DATA, EkfStatusFlags,
     GLOBAL_POSITION_INT_DATA, GPS_RAW_INT_DATA, GpsFixType, HEARTBEAT_DATA, MavAutopilot, MavCmd,
-    MavFrame, MavMessage, MavModeFlag, MavType, PositionTargetTypemask,
+    MavFrame, MavMessage, MavModeFlag, MavType, NAMED_VALUE_FLOAT_DATA, PositionTargetTypemask,
     SET_POSITION_TARGET_GLOBAL_INT_DATA, SET_POSITION_TARGET_LOCAL_NED_DATA, SYS_STATUS_DATA,
 };
 
 use crate::control::ned;
 use crate::geometry::geodesy::{LatLon, LocalFrame};
-use crate::protocol::{CommandDocument, FixDocument, PoseDocument};
+use crate::protocol::{CommandDocument, FixDocument, LinkSampleDocument, PoseDocument};
 
 /// ArduPilot Rover's GUIDED custom mode.
 pub const GUIDED: u32 = 15;
@@ -64,6 +64,19 @@ pub enum Refusal {
     FarFromOrigin,
     /// An attitude with a non-finite yaw or yaw rate.
     InvalidAttitude,
+    /// A sample (NAMED_VALUE_FLOAT of the sample name) whose value is not
+    /// finite, or that came before any position.
+    InvalidSample,
+}
+
+/// Which NAMED_VALUE_FLOAT is a sample of the risk field, and its σ
+/// (`agent --sample-name`, `--sample-sd`; docs/learning.md).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SampleSource {
+    /// The message's `name` (at most 10 characters, as MAVLink carries it).
+    pub name: String,
+    /// The sensor's standard deviation, in the value's units.
+    pub sd: f64,
 }
 
 /// ArduPilot Rover's mode names by custom mode.
@@ -147,6 +160,8 @@ pub struct Vehicle {
     /// The point (x, y in the mission's plane) the vehicle was last told
     /// to keep station at.
     station: Option<(f64, f64)>,
+    /// Which NAMED_VALUE_FLOAT is a sample.
+    sample: Option<SampleSource>,
     arming: Arming,
     setpoints: u64,
 }
@@ -170,6 +185,7 @@ impl Vehicle {
             braking_since: None,
             holds_station: None,
             station: None,
+            sample: None,
             arming: if arm {
                 Arming::Wanted { last_ms: None }
             } else {
@@ -185,6 +201,43 @@ impl Vehicle {
     pub fn holding_station(mut self, radius: Option<f64>) -> Vehicle {
         self.holds_station = radius;
         self
+    }
+
+    /// NAMED_VALUE_FLOATs named `source.name` are samples of the risk
+    /// field, taken where the vehicle last said it was.
+    pub fn sampling(mut self, source: Option<SampleSource>) -> Vehicle {
+        self.sample = source;
+        self
+    }
+
+    /// A NAMED_VALUE_FLOAT: a sample at the vehicle's newest position when
+    /// it carries the sample name, else nothing.
+    pub fn on_named_value(
+        &self,
+        d: &NAMED_VALUE_FLOAT_DATA,
+    ) -> Result<Option<LinkSampleDocument>, Refusal> {
+        let Some(source) = &self.sample else {
+            return Ok(None);
+        };
+        // MAVLink pads the name with NULs; a name of all ten characters has none.
+        let name = d.name.to_str().unwrap_or_default().trim_end_matches('\0');
+        if name != source.name {
+            return Ok(None);
+        }
+        let value = f64::from(d.value);
+        let Some(p) = self.position.filter(|_| value.is_finite()) else {
+            return Err(Refusal::InvalidSample);
+        };
+        let (x, y) = self.frame.to_local(LatLon {
+            lat: p.lat,
+            lon: p.lon,
+        });
+        Ok(Some(LinkSampleDocument {
+            x,
+            y,
+            value,
+            sd: source.sd,
+        }))
     }
 
     /// Armed and in GUIDED: the coordinator's commands are followed.

@@ -100,6 +100,11 @@ pub enum Request {
         samples: Vec<crate::protocol::SampleDocument>,
         reply: oneshot::Sender<Result<crate::protocol::SamplesAnswerDocument, CoordinatorError>>,
     },
+    /// A sample on vessel `vessel`'s link; a refusal is answered there.
+    LinkSample {
+        vessel: String,
+        sample: crate::protocol::LinkSampleDocument,
+    },
     /// `GET /api/v1/risk`: the density the fleet covers.
     Belief {
         reply: oneshot::Sender<crate::protocol::BeliefDocument>,
@@ -220,6 +225,8 @@ struct Entry {
     neighbours: Option<u32>,
     /// Its poses judged on their own, and its quarantine.
     standing: judging::Standing,
+    /// When its link was last told of a refused sample [mission s].
+    sample_notice: Option<f64>,
 }
 
 /// Takes a link's pose into `entry` (vessel `id`) when the link has sent a
@@ -512,6 +519,7 @@ impl Coordinator {
                 };
                 let _ = reply.send(outcome);
             }
+            Request::LinkSample { vessel, sample } => self.link_sample(vessel, sample),
             Request::Belief { reply } => {
                 let doc = match &self.learning {
                     Some(l) => l.document(&self.mission),

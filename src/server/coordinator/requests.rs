@@ -16,6 +16,9 @@ use crate::protocol::{AgilityDocument, CoordinatorMessage};
 /// steers it through.
 const MAX_STATION_RADIUS: f64 = 20.0;
 
+/// A link hears of its refused samples at most this often [mission s].
+const SAMPLE_NOTICE_EVERY: f64 = 10.0;
+
 fn agility(declared: Option<AgilityDocument>) -> Result<Agility, CoordinatorError> {
     let Some(a) = declared else {
         return Ok(Agility::UNDECLARED);
@@ -75,6 +78,7 @@ impl Coordinator {
             last_command: None,
             neighbours: None,
             standing: judging::Standing::default(),
+            sample_notice: None,
         });
         if let Some(old) = entry.link.take() {
             let _ = old.tx.try_send(
@@ -144,5 +148,64 @@ impl Coordinator {
         let evaluation = self.evaluate_live(&live);
         self.publish(time, &live, evaluation.as_ref());
         Ok(answer)
+    }
+
+    /// A sample from vessel `vessel`'s link, stamped with the mission's
+    /// time; a refusal (or a coordinator that does not learn) is answered
+    /// on that link as an `error` that leaves it open.
+    pub(super) fn link_sample(&mut self, vessel: String, s: crate::protocol::LinkSampleDocument) {
+        let now = self.time();
+        let doc = crate::protocol::SampleDocument {
+            vessel: vessel.clone(),
+            t: now,
+            x: s.x,
+            y: s.y,
+            value: s.value,
+            sd: s.sd,
+        };
+        // A sample is where its vessel is: while the vessel's own poses are
+        // refused (or none has been believed yet), so is its samples'
+        // position.
+        let unplaced = self
+            .vessels
+            .get(&vessel)
+            .is_none_or(|e| e.standing.held() || e.pose.is_none());
+        let refusal = match &mut self.learning {
+            Some(_) if unplaced => {
+                metrics::counter!(crate::server::metrics::SAMPLES, "outcome" => "unplaced")
+                    .increment(1);
+                Some((
+                    "unplaced".to_string(),
+                    "the vessel's poses are refused (or none believed yet): so are its samples"
+                        .to_string(),
+                ))
+            }
+            Some(l) => l
+                .take(vec![doc], &self.mission, now)
+                .refused
+                .pop()
+                .map(|r| (r.code, r.reason)),
+            None => Some((
+                "not_learning".to_string(),
+                CoordinatorError::NotLearning.to_string(),
+            )),
+        };
+        let Some(entry) = self.vessels.get_mut(&vessel) else {
+            return;
+        };
+        // Every refusal is counted; the link hears of them at most once
+        // every SAMPLE_NOTICE_EVERY mission seconds (a sensor at 1 Hz would
+        // otherwise fill its log).
+        let quiet = entry
+            .sample_notice
+            .is_some_and(|at| now - at < SAMPLE_NOTICE_EVERY);
+        if let (Some((code, message)), Some(link), false) = (refusal, &entry.link, quiet) {
+            let error = CoordinatorMessage::Error {
+                code: format!("sample_{code}"),
+                message,
+            };
+            let _ = link.tx.try_send(Outgoing::Notice(error));
+            entry.sample_notice = Some(now);
+        }
     }
 }

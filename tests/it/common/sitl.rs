@@ -110,10 +110,30 @@ pub(crate) fn instance() -> u32 {
 /// Starts boat `sysid` at `home` (lat, lon) heading `heading_deg`, as
 /// `start-boats` does.
 pub(crate) fn boat(ap: &Ardupilot, sysid: u8, home: (f64, f64), heading_deg: f64) -> Boat {
+    boat_with(ap, sysid, home, heading_deg, None)
+}
+
+/// [`boat`], running the Lua `script` (as `script.lua` in the `scripts`
+/// folder of its working directory, with `SCR_ENABLE 1`) when one is given.
+pub(crate) fn boat_with(
+    ap: &Ardupilot,
+    sysid: u8,
+    home: (f64, f64),
+    heading_deg: f64,
+    script: Option<&str>,
+) -> Boat {
     let i = instance();
     let dir = tempfile::tempdir().unwrap();
+    let mut defaults = ap.defaults.clone();
+    if let Some(lua) = script {
+        std::fs::create_dir(dir.path().join("scripts")).unwrap();
+        std::fs::write(dir.path().join("scripts/script.lua"), lua).unwrap();
+        let parm = dir.path().join("scripting.parm");
+        std::fs::write(&parm, "SCR_ENABLE 1\n").unwrap();
+        defaults = format!("{defaults},{}", parm.display());
+    }
     let child = Command::new(&ap.binary)
-        .args(["--model", "motorboat", "--defaults", &ap.defaults])
+        .args(["--model", "motorboat", "--defaults", &defaults])
         .arg("--home")
         .arg(format!("{:.7},{:.7},0,{heading_deg}", home.0, home.1))
         .arg(format!("-I{i}"))

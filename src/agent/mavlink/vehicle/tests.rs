@@ -411,3 +411,41 @@ fn a_station_point_is_sent_once_and_again_only_when_it_moves() {
         [MavMessage::SET_POSITION_TARGET_GLOBAL_INT(_)]
     ));
 }
+
+/// A NAMED_VALUE_FLOAT of the sample name is a sample where the boat last
+/// was (the name NUL-padded as MAVLink carries it); other names are not
+/// samples; a non-finite value, or one before any position, is refused.
+#[test]
+fn a_named_float_of_the_sample_name_is_a_sample_at_the_boat() {
+    let source = SampleSource {
+        name: "RISK".into(),
+        sd: 0.05,
+    };
+    let mut v = vehicle(false).sampling(Some(source));
+    let named = |name: &str, value: f32| NAMED_VALUE_FLOAT_DATA {
+        time_boot_ms: 10,
+        value,
+        name: name.into(),
+    };
+    assert_eq!(
+        v.on_named_value(&named("RISK", 2.5)),
+        Err(Refusal::InvalidSample),
+        "before any position"
+    );
+    v.on_attitude(&attitude(100)).unwrap();
+    v.on_position(&position(100)).unwrap();
+    let s = v.on_named_value(&named("RISK", 2.5)).unwrap().unwrap();
+    assert!(
+        (s.x - 50.0).abs() < 0.1 && (s.y - 100.0).abs() < 0.1,
+        "{s:?}"
+    );
+    assert_eq!((s.value, s.sd), (2.5, 0.05));
+    assert_eq!(v.on_named_value(&named("DEPTH", 2.5)), Ok(None));
+    assert_eq!(v.on_named_value(&named("RISKY", 2.5)), Ok(None));
+    assert_eq!(
+        v.on_named_value(&named("RISK", f32::NAN)),
+        Err(Refusal::InvalidSample)
+    );
+    // Without --sample-name nothing is a sample.
+    assert_eq!(vehicle(false).on_named_value(&named("RISK", 1.0)), Ok(None));
+}

@@ -91,6 +91,33 @@ pub(crate) struct Args {
         value_parser = parse_station_radius
     )]
     station_radius: f64,
+    /// With --mavlink: NAMED_VALUE_FLOAT messages of this name (at most 10
+    /// characters, as a Lua script's `gcs:send_named_float` or a companion
+    /// computer sends them) are samples of the risk field at the boat's
+    /// position, sent to the coordinator (docs/learning.md).
+    #[arg(long, value_name = "NAME", requires_all = ["mavlink", "sample_sd"], value_parser = parse_sample_name)]
+    sample_name: Option<String>,
+    /// With --sample-name: the sensor's standard deviation, in the value's
+    /// units (> 0).
+    #[arg(long, value_name = "SD", requires = "sample_name", value_parser = parse_sample_sd)]
+    sample_sd: Option<f64>,
+}
+
+fn parse_sample_name(s: &str) -> Result<String, String> {
+    if (1..=10).contains(&s.len()) && s.is_ascii() {
+        Ok(s.to_string())
+    } else {
+        Err("expected 1 to 10 ASCII characters (MAVLink's NAMED_VALUE_FLOAT name)".into())
+    }
+}
+
+fn parse_sample_sd(s: &str) -> Result<f64, String> {
+    let sd: f64 = s.trim().parse().map_err(|e| format!("{e}"))?;
+    if sd.is_finite() && sd > 0.0 {
+        Ok(sd)
+    } else {
+        Err("expected a finite number > 0".into())
+    }
 }
 
 fn parse_station_radius(s: &str) -> Result<f64, String> {
@@ -198,6 +225,10 @@ async fn bridge(args: Args) -> anyhow::Result<()> {
         endpoints: args.mavlink,
         arm: args.arm,
         station_radius: (args.station_radius > 0.0).then_some(args.station_radius),
+        sample: args
+            .sample_name
+            .zip(args.sample_sd)
+            .map(|(name, sd)| seacover::agent::mavlink::SampleSource { name, sd }),
         token: args.token.value,
         id: args.id,
         sysid: args.mavlink_sysid,
