@@ -19,6 +19,12 @@ const SETTLED: f64 = 1e-9;
 /// density: they change no integral that matters and each costs the
 /// engine a term.
 const NEGLIGIBLE: f64 = 1e-6;
+/// Huber's threshold: a sample whose residual is more than this many of
+/// its own σ from the fit counts as c/|r| of a sample (a gross outlier of
+/// 100 σ as 3 %).
+const HUBER: f64 = 3.0;
+/// Reweighting rounds at most (each one more fit).
+const REWEIGHTS: usize = 10;
 
 /// The prior's spreads τ: how far each coefficient may plausibly be from
 /// its prior value (the density's units).
@@ -94,9 +100,43 @@ impl Learner {
         self.samples.is_empty()
     }
 
-    /// The belief given every sample so far.
+    /// The belief given every sample so far. Robust to gross outliers
+    /// (Huber's weights by iterated reweighting): a sample more than
+    /// [`HUBER`] of its σ from the fit is weighted down to c/|r|, and the
+    /// fit made again, [`REWEIGHTS`] times at most, until no weight changes.
     pub fn fit(&self) -> Belief {
-        let (a, b) = self.normal_equations();
+        let mut sorted = self.samples.clone();
+        sorted.sort_unstable_by_key(Sample::key);
+        let mut weights = vec![1.0; sorted.len()];
+        let (mut mean, mut covariance) = self.solve(&sorted, &weights);
+        let mut f = Vec::new();
+        for _ in 0..REWEIGHTS {
+            let mut changed = false;
+            for (s, w) in sorted.iter().zip(&mut weights) {
+                self.features(s.position, &mut f);
+                let fit: f64 = f.iter().map(|&(i, fi)| fi * mean[i]).sum();
+                let r = ((s.value - fit) / s.sd).abs();
+                let huber = if r > HUBER { HUBER / r } else { 1.0 };
+                changed |= (huber - *w).abs() > 1e-3;
+                *w = huber;
+            }
+            if !changed {
+                break;
+            }
+            (mean, covariance) = self.solve(&sorted, &weights);
+        }
+        Belief {
+            lattice: self.lattice.clone(),
+            prior: self.prior.clone(),
+            mean,
+            covariance,
+        }
+    }
+
+    /// The mean (θ ≥ 0) and the unconstrained covariance with each sorted
+    /// sample weighted by `weights`.
+    fn solve(&self, sorted: &[Sample], weights: &[f64]) -> (DVector<f64>, DMatrix<f64>) {
+        let (a, b) = self.normal_equations(sorted, weights);
         // The prior's precision makes A positive definite.
         let chol = a.clone().cholesky().expect("A is positive definite");
         let free = chol.solve(&b);
@@ -108,17 +148,13 @@ impl Learner {
         } else {
             nonnegative(&a, &b)
         };
-        Belief {
-            lattice: self.lattice.clone(),
-            prior: self.prior.clone(),
-            mean,
-            covariance,
-        }
+        (mean, covariance)
     }
 
-    /// A = Σ f fᵀ/σ² + diag(τ⁻²) and b = Σ f y/σ² + diag(τ⁻²) θ₀, the
-    /// samples summed in their own order ([`Sample::key`]).
-    fn normal_equations(&self) -> (DMatrix<f64>, DVector<f64>) {
+    /// A = Σ ω f fᵀ/σ² + diag(τ⁻²) and b = Σ ω f y/σ² + diag(τ⁻²) θ₀, the
+    /// samples (sorted in their own order, [`Sample::key`]) with their
+    /// weights ω.
+    fn normal_equations(&self, sorted: &[Sample], weights: &[f64]) -> (DMatrix<f64>, DVector<f64>) {
         let n = FIXED + self.lattice.len();
         let mut a = DMatrix::zeros(n, n);
         let mut b = DVector::zeros(n);
@@ -131,12 +167,10 @@ impl Learner {
         for k in FIXED..n {
             a[(k, k)] = p.weight_sd.powi(-2);
         }
-        let mut sorted = self.samples.clone();
-        sorted.sort_unstable_by_key(Sample::key);
         let mut f = Vec::new();
-        for s in &sorted {
+        for (s, omega) in sorted.iter().zip(weights) {
             self.features(s.position, &mut f);
-            let w = s.sd.powi(-2);
+            let w = omega * s.sd.powi(-2);
             for &(i, fi) in &f {
                 b[i] += w * fi * s.value;
                 for &(j, fj) in &f {

@@ -15,7 +15,9 @@
 //! mean is the posterior mode under θ ≥ 0 (a small quadratic programme,
 //! solved by an active set), and
 //! its uncertainty that of the unconstrained Gaussian posterior,
-//! Σ = A⁻¹ with A = Σ f fᵀ / σ² + diag(τ⁻²).
+//! Σ = A⁻¹ with A = Σ f fᵀ / σ² + diag(τ⁻²). Gross outliers are weighted
+//! down by Huber's weights (iterated reweighting; a sample r of its σ from
+//! the fit counts as min(1, 3/|r|) of one).
 //!
 //! Why this shape: a belief that stays a mixture of Gaussians keeps the
 //! engine exact and fast (no grid, [`crate::coverage`]), the weights are

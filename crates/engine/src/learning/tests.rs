@@ -106,6 +106,25 @@ fn a_survey_recovers_the_paper_map() {
     );
 }
 
+/// Gross outliers (every 25th sample of the noisy survey replaced by 65,
+/// five times the range, about 100 σ off) are weighted down: the map is
+/// recovered about as well as without them.
+#[test]
+fn gross_outliers_are_weighted_down() {
+    let truth = paper_truth();
+    let mut samples = survey(&truth, 4.0, 0.65, 1);
+    for s in samples.iter_mut().step_by(25) {
+        *s = Sample::new(s.position, 65.0, s.sd).unwrap();
+    }
+    let belief = learner(&samples).fit().density(0.0);
+    let (rms, max) = errors(&belief, &truth);
+    eprintln!("with 4 % gross outliers: rms {rms:.4}, max {max:.4} of the range");
+    assert!(
+        rms < 0.04 && max < 0.2,
+        "outliers: rms {rms:.4}, max {max:.4} of the range"
+    );
+}
+
 #[test]
 fn the_belief_does_not_depend_on_the_order_of_the_samples() {
     let samples = survey(&paper_truth(), 10.0, 0.65, 2);
