@@ -50,6 +50,10 @@ fn evaluate(c: &mut Criterion) {
         "fleet-1000",
         "fleet-1000-mixed",
         "fleet-10000",
+        // Learned beliefs (docs/learning.md): 400 Gaussians on the paper's
+        // square, 5041 on fleet-1000's.
+        "paper-belief",
+        "fleet-1000-belief",
     ];
     group_of(c, "evaluate", &names, &Options::default());
 }
