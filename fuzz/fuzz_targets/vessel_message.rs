@@ -32,6 +32,9 @@ fuzz_target!(|data: &[u8]| {
                         .all(|v| v.is_finite())
                 );
             }
+            VesselMessage::Sample(s) => {
+                assert!([s.x, s.y, s.value, s.sd].iter().all(|v| v.is_finite()));
+            }
         }
         let json = serde_json::to_string(&message).expect("a parsed message serializes");
         let again: VesselMessage =
