@@ -133,7 +133,7 @@ impl Learning {
             Cover::Learned | Cover::Prior => prior.clone(),
         };
         Ok(Learning {
-            learner: Learner::new(lattice, prior.clone(), Params::new(1.0, 1.0, 5.0)?),
+            learner: Learner::new(lattice, prior.clone(), Params::default()),
             rng: ChaCha8Rng::seed_from_u64(seed ^ 0x5eac_0fe4),
             sd: config.noise.max(1e-6) * scale,
             range: scale,

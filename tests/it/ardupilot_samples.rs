@@ -13,6 +13,7 @@ use std::time::Duration;
 
 use serde_json::Value;
 
+use crate::common::server::density_at;
 use crate::common::sitl::{
     Bridge, Coordinator, ORIGIN, ardupilot, boat_with, mission_toml, one_sitl_fleet, place,
     wait_for,
@@ -47,20 +48,6 @@ return update, 1000
         (lat * 1e7).round() as i64,
         (lon * 1e7).round() as i64
     )
-}
-
-/// A density document's value at (x, y).
-fn value(risk: &Value, x: f64, y: f64) -> f64 {
-    let objects = risk["objects"].as_array().unwrap();
-    risk["base"].as_f64().unwrap()
-        + objects
-            .iter()
-            .map(|o| {
-                let f = |k: &str| o[k].as_f64().unwrap();
-                let d2 = (x - f("x")).powi(2) + (y - f("y")).powi(2);
-                f("alpha") * (-d2 / (2.0 * f("sigma").powi(2))).exp()
-            })
-            .sum::<f64>()
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -113,7 +100,7 @@ async fn a_lua_sensor_on_a_sitl_boat_is_learned_by_the_coordinator() {
     let vessels = coordinator.vessels(&http).await;
     let pose = vessels[0].pose.as_ref().expect("the boat has a pose");
     let (got, want) = (
-        value(&learned["risk"], pose.x, pose.y),
+        density_at(&learned["risk"], pose.x, pose.y),
         field(pose.x, pose.y),
     );
     println!(

@@ -15,26 +15,12 @@ use serde_json::{Value, json};
 use tokio_tungstenite::tungstenite::Message;
 
 use crate::common::process::KillOnDrop;
-use crate::common::server::{get_json, metric_sum, metrics, serve_command, start};
+use crate::common::server::{density_at, get_json, metric_sum, metrics, serve_command, start};
 
 /// The paper's map, Φ(x, y) = 0.1 + Σ α exp(−d² / 2σ²), σ = 10 m.
 fn truth(x: f64, y: f64) -> f64 {
     let g = |cx: f64, cy: f64, a: f64| a * (-((x - cx).powi(2) + (y - cy).powi(2)) / 200.0).exp();
     0.1 + g(25.0, 70.0, 10.0) + g(70.0, 75.0, 13.0) + g(60.0, 25.0, 8.0)
-}
-
-/// A density document's value at (x, y).
-fn value(risk: &Value, x: f64, y: f64) -> f64 {
-    let objects = risk["objects"].as_array().unwrap();
-    risk["base"].as_f64().unwrap()
-        + objects
-            .iter()
-            .map(|o| {
-                let f = |k: &str| o[k].as_f64().unwrap();
-                let d2 = (x - f("x")).powi(2) + (y - f("y")).powi(2);
-                f("alpha") * (-d2 / (2.0 * f("sigma").powi(2))).exp()
-            })
-            .sum::<f64>()
 }
 
 fn serve(config: &str, learning: bool) -> (KillOnDrop, String, tempfile::TempDir) {
@@ -128,7 +114,7 @@ async fn a_coordinator_learns_the_map_from_posted_samples() {
     };
     assert_eq!(learned["samples"], 441, "{learned}");
     for (x, y) in [(25.0, 70.0), (70.0, 75.0), (60.0, 25.0), (5.0, 5.0)] {
-        let (got, want) = (value(&learned["risk"], x, y), truth(x, y));
+        let (got, want) = (density_at(&learned["risk"], x, y), truth(x, y));
         assert!(
             (got - want).abs() <= 0.1 * want.max(1.0),
             "belief at ({x}, {y}): {got} against {want}"

@@ -101,8 +101,7 @@ impl Worker {
             .name("seacover-learner".into())
             .spawn(move || {
                 while let Ok(job) = inbox.recv() {
-                    let params = Params::new(1.0, 1.0, 5.0).expect("valid spreads");
-                    let mut learner = Learner::new(job.lattice, job.prior, params);
+                    let mut learner = Learner::new(job.lattice, job.prior, Params::default());
                     for s in job.samples {
                         learner.add(s);
                     }
@@ -363,7 +362,7 @@ impl Learning {
 }
 
 /// A density as a mission's risk document (objects without ids).
-pub(super) fn risk_document(field: &RiskField) -> RiskDocument {
+fn risk_document(field: &RiskField) -> RiskDocument {
     RiskDocument {
         base: field.base(),
         objects: field

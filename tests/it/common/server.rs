@@ -6,6 +6,7 @@ use std::process::{Child, Command, Stdio};
 use std::time::Duration;
 
 use seacover::protocol::MissionDocument;
+use serde_json::Value;
 
 /// `seacover serve` on port 0 with this data directory and configuration.
 pub(crate) fn serve_command(data: &Path, config: &Path) -> Command {
@@ -87,6 +88,21 @@ pub(crate) fn metric_sum(text: &str, name: &str, label: &str) -> f64 {
         .filter(|l| l.starts_with(name) && l.contains(label))
         .filter_map(|l| l.rsplit(' ').next()?.parse::<f64>().ok())
         .sum()
+}
+
+/// A density document's value at (x, y): its base plus every Gaussian
+/// object (`GET /api/v1/risk`'s `risk`, a mission's `risk`).
+pub(crate) fn density_at(risk: &Value, x: f64, y: f64) -> f64 {
+    let objects = risk["objects"].as_array().unwrap();
+    risk["base"].as_f64().unwrap()
+        + objects
+            .iter()
+            .map(|o| {
+                let f = |k: &str| o[k].as_f64().unwrap();
+                let d2 = (x - f("x")).powi(2) + (y - f("y")).powi(2);
+                f("alpha") * (-d2 / (2.0 * f("sigma").powi(2))).exp()
+            })
+            .sum::<f64>()
 }
 
 /// Polls `check` every 100 ms for up to `secs`.

@@ -38,6 +38,18 @@ pub struct Params {
     pub weight_sd: f64,
 }
 
+impl Default for Params {
+    /// The spreads every measurement in docs/learning.md uses: 1 for the
+    /// base and for the prior's scale, 5 for each lattice weight.
+    fn default() -> Self {
+        Params {
+            base_sd: 1.0,
+            prior_scale_sd: 1.0,
+            weight_sd: 5.0,
+        }
+    }
+}
+
 impl Params {
     /// Validates every spread finite and in (0, [`MAX_DENSITY`]].
     pub fn new(base_sd: f64, prior_scale_sd: f64, weight_sd: f64) -> Result<Self, InputError> {
