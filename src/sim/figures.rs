@@ -88,6 +88,33 @@ pub fn draw_all(out: &Path, config: &Config, run: &Run) -> Result<(), String> {
     Ok(())
 }
 
+/// One panel of named time series with its legend, as `STEM.png` and
+/// `STEM.svg` (the learning study's figure).
+pub fn draw_series(
+    stem: &Path,
+    title: &str,
+    y_label: &str,
+    t_max: f64,
+    series: &[(String, Vec<(f64, f64)>)],
+) -> Result<(), String> {
+    register_font()?;
+    let size = (1200, 700);
+    let png = stem.with_extension("png");
+    {
+        let area = BitMapBackend::new(&png, size).into_drawing_area();
+        area.fill(&WHITE).map_err(err)?;
+        panel(&area, title, y_label, t_max, series, true)?;
+        area.present()
+            .map_err(|e| format!("{}: {e}", png.display()))?;
+    }
+    let svg = stem.with_extension("svg");
+    let area = SVGBackend::new(&svg, size).into_drawing_area();
+    area.fill(&WHITE).map_err(err)?;
+    panel(&area, title, y_label, t_max, series, true)?;
+    area.present()
+        .map_err(|e| format!("{}: {e}", svg.display()))
+}
+
 /// Draws Fig. 5 alone, as `STEM.png` and `STEM.svg`.
 pub fn draw_trails(stem: &Path, config: &Config, run: &Run) -> Result<(), String> {
     register_font()?;

@@ -20,6 +20,7 @@
 mod config;
 pub mod figures;
 mod learn;
+pub mod learning_study;
 pub mod monitor;
 pub mod output;
 pub mod record;

@@ -129,3 +129,43 @@ fn a_bad_truth_is_named_and_refused() {
     assert!(!out.status.success(), "{err}");
     assert!(err.contains("--noise must be in (0, 1]"), "{err}");
 }
+
+/// `sim learning-study`: the four ways of covering for one seed, its table,
+/// JSON and figure; the clairvoyant ends at H★ by definition, and the
+/// learning fleet ends above the one that does not learn.
+#[test]
+fn the_learning_study_compares_four_fleets() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_seacover"))
+        .args(["sim", "learning-study", "--scenario", SCENARIO])
+        .args(["--seeds", "1", "--duration", "150", "--out"])
+        .arg(dir.path())
+        .output()
+        .expect("the binary runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let table = std::fs::read_to_string(dir.path().join("table.md")).unwrap();
+    assert_eq!(String::from_utf8_lossy(&out.stdout), table);
+    assert_eq!(table.lines().count(), 6, "{table}");
+    let rows: Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("study.json")).unwrap())
+            .unwrap();
+    let share = |fleet: &str| {
+        rows.as_array()
+            .unwrap()
+            .iter()
+            .find(|r| r["fleet"] == fleet)
+            .unwrap_or_else(|| panic!("no {fleet} in {rows}"))["share_end"]
+            .as_f64()
+            .unwrap()
+    };
+    assert_eq!(share("clairvoyant"), 1.0);
+    assert!(share("learning (mean)") > share("no learning"), "{rows}");
+    for file in ["learning.png", "learning.svg"] {
+        let len = std::fs::metadata(dir.path().join(file)).unwrap().len();
+        assert!(len > 10_000, "{file}: {len} bytes");
+    }
+}

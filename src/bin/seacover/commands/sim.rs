@@ -138,6 +138,31 @@ enum Cover {
 
 #[derive(clap::Subcommand)]
 enum Study {
+    /// A scenario with a truth covered four ways per seed (the
+    /// clairvoyant, no learning, the mean belief, an optimistic one), each
+    /// judged on the truth as a share of H★: table.md, study.json and the
+    /// figure learning.png / .svg of the first seed (docs/learning.md).
+    LearningStudy {
+        /// A scenario file with a `truth`.
+        #[arg(
+            long,
+            value_name = "FILE",
+            default_value = "examples/paper-learning.json"
+        )]
+        scenario: String,
+        /// Seeds 1..=N.
+        #[arg(long, value_name = "N", default_value_t = 5)]
+        seeds: u64,
+        /// Simulated seconds per run.
+        #[arg(long, value_name = "SECONDS", default_value_t = 300.0)]
+        duration: f64,
+        /// The optimistic fleet's κ.
+        #[arg(long, value_name = "K", default_value_t = 1.0)]
+        kappa: f64,
+        /// Where to write the table, the JSON and the figure.
+        #[arg(long, value_name = "DIR", default_value = "learning-study")]
+        out: PathBuf,
+    },
     /// The harbour with 8 and 30 vessels from random starts, each seed with
     /// the safety filter on and off: collisions, incursions, closest
     /// approaches, H and interventions (docs/safety.md).
@@ -192,6 +217,16 @@ pub(crate) fn run(args: Args) -> ExitCode {
             ref out,
             jobs,
         }) => ("sim safety-study", safety_study(seeds, duration, out, jobs)),
+        Some(Study::LearningStudy {
+            ref scenario,
+            seeds,
+            duration,
+            kappa,
+            ref out,
+        }) => (
+            "sim learning-study",
+            learning_study(scenario, seeds, duration, kappa, out),
+        ),
         None => ("sim", simulate(&args)),
     };
     match result {
@@ -352,6 +387,45 @@ fn safety_study(seeds: u64, duration: f64, out: &Path, jobs: usize) -> anyhow::R
         "{} runs in {:.0} s; study.json, table.md and harbour-30-trails.{{png,svg}} in {}",
         runs.len(),
         started.elapsed().as_secs_f64(),
+        out.display()
+    );
+    Ok(())
+}
+
+fn learning_study(
+    scenario: &str,
+    seeds: u64,
+    duration: f64,
+    kappa: f64,
+    out: &Path,
+) -> anyhow::Result<()> {
+    ensure!((1..=100).contains(&seeds), "--seeds must be in [1, 100]");
+    ensure!(
+        duration.is_finite() && duration > 0.0 && duration <= 86_400.0,
+        "--duration must be in (0, 86400] s"
+    );
+    ensure!((0.0..=10.0).contains(&kappa), "--kappa must be in [0, 10]");
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let seed_list: Vec<u64> = (1..=seeds).collect();
+    let study =
+        seacover::sim::learning_study::run_learning_study(scenario, &seed_list, duration, kappa)?;
+    let table = seacover::sim::learning_study::table(&study, duration);
+    std::fs::write(out.join("table.md"), &table)?;
+    std::fs::write(
+        out.join("study.json"),
+        serde_json::to_string_pretty(&study.rows)? + "\n",
+    )?;
+    seacover::sim::figures::draw_series(
+        &out.join("learning"),
+        "H on the truth over H★ (seed 1)",
+        "H_true / H★",
+        duration,
+        &study.curves,
+    )
+    .map_err(anyhow::Error::msg)?;
+    print!("{table}");
+    eprintln!(
+        "learning study: table.md, study.json, learning.png and learning.svg in {}",
         out.display()
     );
     Ok(())
