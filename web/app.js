@@ -9,6 +9,7 @@ import { MapView, inRegion, ramp } from "./map.js";
 import { Series, drawChart } from "./charts.js";
 import { GeoOverlay } from "./geo-overlay.js";
 import { startReplayBar } from "./replay.js";
+import { startLearning } from "./belief.js";
 
 const $ = (id) => document.getElementById(id);
 const REPLAY = document.documentElement.dataset.mode === "replay";
@@ -30,6 +31,8 @@ const state = {
 };
 // For people poking from the console, and for the browser tests.
 window.seacover = { view, state, geo, replay: null };
+// A learning coordinator's belief, uncertainty and samples (belief.js).
+startLearning(view);
 // A replay's bar; a seek clears the trails, which would otherwise join the
 // old moment to the new one, and starts the H chart again from the
 // recording's history up to the new moment.
@@ -299,7 +302,10 @@ function drawCharts() {
 
 // ---- legend ---------------------------------------------------------------------
 
-view.onLegend = (min, max) => {
+const LEGEND = { mission: "Φ", belief: "Φ learned", uncertainty: "σ of Φ" };
+
+view.onLegend = (min, max, layer) => {
+  $("legend-label").textContent = LEGEND[layer] || "Φ";
   const bar = $("legend-bar");
   const ctx = bar.getContext("2d");
   for (let i = 0; i < bar.width; i++) {

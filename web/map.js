@@ -97,6 +97,13 @@ export class MapView {
     this.follow = false;
     this.heat = null; // { canvas, x0, y0, x1, y1, min, max }
     this.heatKey = "";
+    // What the heat map shows (belief.js): the mission's risk, the belief
+    // the fleet covers (GET /api/v1/risk) or its uncertainty; and the
+    // newest samples (GET /api/v1/samples) as dots in the heat's colours.
+    this.layer = "mission";
+    this.belief = null;
+    this.samples = [];
+    this.showSamples = true;
     this.dirty = true;
     this.dragObject = null; // { id, x, y } while an object is dragged
     new ResizeObserver(() => this.resize()).observe(canvas);
@@ -241,11 +248,39 @@ export class MapView {
     return best;
   }
 
-  /** Recomputes the heat map image when the risk or region changed. */
+  /**
+   * The field the heat map shows at (x, y): the mission's Φ, the belief's,
+   * or the belief's σ (its grid's values at cell centres, interpolated
+   * bilinearly, held at the edges).
+   */
+  field() {
+    const b = this.belief;
+    if (this.layer === "belief" && b) return (x, y) => density(b.risk, x, y);
+    if (this.layer === "uncertainty" && b && b.uncertainty) {
+      const u = b.uncertainty;
+      const at = (i, j) => u.sd[Math.min(u.ny - 1, Math.max(0, j)) * u.nx + Math.min(u.nx - 1, Math.max(0, i))];
+      return (x, y) => {
+        const fx = (x - u.x0) / u.step - 0.5;
+        const fy = (y - u.y0) / u.step - 0.5;
+        const i = Math.floor(fx), j = Math.floor(fy);
+        const a = fx - i, b = fy - j;
+        return (1 - b) * ((1 - a) * at(i, j) + a * at(i + 1, j)) + b * ((1 - a) * at(i, j + 1) + a * at(i + 1, j + 1));
+      };
+    }
+    const risk = this.mission.risk;
+    return (x, y) => density(risk, x, y);
+  }
+
+  /** Recomputes the heat map image when the field or region changed. */
   heatImage() {
     const m = this.mission;
-    const key = JSON.stringify([m.risk, m.region.polygon]);
+    const belief = this.belief;
+    const shown = this.layer === "mission" || !belief
+      ? ["mission", m.risk]
+      : [this.layer, belief.fits, belief.fitted_at, belief.risk.objects.length];
+    const key = JSON.stringify([shown, m.region.polygon]);
     if (key === this.heatKey && this.heat) return this.heat;
+    const phiAt = this.field();
     const b = bounds(m.region.polygon);
     const n = 160;
     const aspect = (b.y1 - b.y0) / Math.max(b.x1 - b.x0, 1e-9);
@@ -257,7 +292,7 @@ export class MapView {
       const y = b.y1 - ((j + 0.5) / ny) * (b.y1 - b.y0);
       for (let i = 0; i < nx; i++) {
         const x = b.x0 + ((i + 0.5) / nx) * (b.x1 - b.x0);
-        const phi = density(m.risk, x, y);
+        const phi = phiAt(x, y);
         values[j * nx + i] = phi;
         min = Math.min(min, phi);
         max = Math.max(max, phi);
@@ -279,7 +314,7 @@ export class MapView {
     octx.putImageData(img, 0, 0);
     this.heat = { canvas: off, ...b, min, max };
     this.heatKey = key;
-    this.onLegend?.(min, max);
+    this.onLegend?.(min, max, shown[0]);
     return this.heat;
   }
 
@@ -380,6 +415,26 @@ export class MapView {
       ctx.stroke();
     }
     ctx.globalAlpha = 1;
+
+    // Samples: dots in the heat map's colours (for its own field: the
+    // value measured against the belief's range), ringed so that a sample
+    // that agrees with the map still shows.
+    if (this.showSamples && this.layer !== "mission" && this.samples.length) {
+      const span = heat.max - heat.min || 1;
+      const radius = Math.max(2, Math.min(4, this.scale * 0.8));
+      ctx.lineWidth = 1;
+      ctx.strokeStyle = "rgba(255,255,255,0.8)";
+      for (const s of this.samples) {
+        const [sx, sy] = this.toScreen(s.x, s.y);
+        const t = this.layer === "belief" ? Math.min(1, Math.max(0, (s.value - heat.min) / span)) : 0;
+        const [r, g, bl] = ramp(t);
+        ctx.beginPath();
+        ctx.arc(sx, sy, radius, 0, 2 * Math.PI);
+        ctx.fillStyle = `rgb(${r},${g},${bl})`;
+        ctx.fill();
+        ctx.stroke();
+      }
+    }
 
     // Risk objects: circles of radius σ, centre dot.
     for (const o of m.risk.objects) {

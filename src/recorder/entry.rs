@@ -88,6 +88,10 @@ pub enum Entry {
     SimVessel(Box<SimVesselRecord>),
     /// `serve --peer`: a peer fleet's beacon as it arrived.
     Beacon(Box<super::messages::BeaconRecord>),
+    /// A sample as judged.
+    Sample(Box<super::messages::SampleRecord>),
+    /// A belief as taken up.
+    Belief(Box<super::messages::BeliefRecord>),
     /// Finish the file and stop.
     Finish,
 }

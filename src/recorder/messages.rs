@@ -37,6 +37,30 @@ pub const MAP_FIX_PREFIX: &str = "/seacover/map/fix/";
 pub const SIM_VESSEL: &str = "/seacover/sim/vessel";
 /// `serve --peer` only: every beacon of the peer fleet as it arrived.
 pub const PEER_BEACON: &str = "/seacover/peer/beacon";
+/// A learning fleet's samples as judged: every one taken, every one
+/// refused but floods (only counted, so that a flood cannot fill the disk).
+pub const SAMPLE: &str = "/seacover/learning/sample";
+/// A learning fleet's belief, each time a new fit is taken up.
+pub const BELIEF: &str = "/seacover/learning/belief";
+
+/// [`SAMPLE`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct SampleRecord {
+    /// Mission time of reception [s].
+    pub time: f64,
+    pub sample: crate::protocol::SampleDocument,
+    /// `accepted`, or the refusal's code (`invalid`, `outside_region`,
+    /// `stale`, `future`; docs/learning.md).
+    pub outcome: String,
+}
+
+/// [`BELIEF`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct BeliefRecord {
+    /// Mission time it was taken up [s].
+    pub time: f64,
+    pub belief: crate::protocol::BeliefDocument,
+}
 
 /// [`PEER_BEACON`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]

@@ -180,6 +180,27 @@ impl Recorder {
         }
     }
 
+    /// A sample received at mission time `time`, and what became of it.
+    pub fn sample(&self, time: f64, sample: &crate::protocol::SampleDocument, outcome: &str) {
+        if self.tx.is_some() {
+            self.record(Entry::Sample(Box::new(messages::SampleRecord {
+                time,
+                sample: sample.clone(),
+                outcome: outcome.to_string(),
+            })));
+        }
+    }
+
+    /// The belief taken up at mission time `time`.
+    pub fn belief(&self, time: f64, belief: crate::protocol::BeliefDocument) {
+        if self.tx.is_some() {
+            self.record(Entry::Belief(Box::new(messages::BeliefRecord {
+                time,
+                belief,
+            })));
+        }
+    }
+
     pub fn event(&self, event: EventRecord) {
         if self.tx.is_some() {
             self.record(Entry::Event(Box::new(event)));

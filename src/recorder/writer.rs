@@ -514,6 +514,18 @@ impl Writer {
                 ns(record.time),
                 &*record,
             ),
+            Entry::Sample(record) => self.put(
+                messages::SAMPLE,
+                messages::spec::<messages::SampleRecord>,
+                ns(record.time),
+                &*record,
+            ),
+            Entry::Belief(record) => self.put(
+                messages::BELIEF,
+                messages::spec::<messages::BeliefRecord>,
+                ns(record.time),
+                &*record,
+            ),
             Entry::Finish => Ok(()),
         }
     }

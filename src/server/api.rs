@@ -482,6 +482,28 @@ pub(super) async fn post_samples(
     Ok(Json(answer.await.map_err(|_| ApiError::ShuttingDown)??))
 }
 
+/// The newest samples the learner has taken (at most 500), oldest first:
+/// what the dashboard draws over the belief.
+#[utoipa::path(
+    get,
+    path = "/api/v1/samples",
+    tag = "learning",
+    responses(
+        (status = 200, description = "The newest samples taken.", body = crate::protocol::SamplesDocument),
+        (status = 409, response = super::responses::Conflict),
+    ),
+)]
+pub(super) async fn get_samples(
+    State(app): State<AppState>,
+) -> Result<Json<crate::protocol::SamplesDocument>, ApiError> {
+    let (reply, answer) = oneshot::channel();
+    app.requests
+        .send(Request::RecentSamples { reply })
+        .await
+        .map_err(|_| ApiError::ShuttingDown)?;
+    Ok(Json(answer.await.map_err(|_| ApiError::ShuttingDown)??))
+}
+
 /// The most samples one `POST /api/v1/samples` carries.
 const MAX_SAMPLES: usize = 1000;
 
@@ -509,5 +531,7 @@ pub(super) async fn risk(State(app): State<AppState>) -> Json<crate::protocol::B
         fits: 0,
         fitted_at: None,
         kappa: 0.0,
+        learning: false,
+        uncertainty: None,
     })
 }

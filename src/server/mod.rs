@@ -145,6 +145,7 @@ pub fn router(app: AppState) -> Router {
         .route("/api/v1/mission", get(api::mission))
         .route("/api/v1/risk-objects", get(api::risk_objects))
         .route("/api/v1/risk", get(api::risk))
+        .route("/api/v1/samples", get(api::get_samples))
         .route("/api/v1/risk-objects/{id}", get(api::get_object))
         .route("/api/v1/vessels", get(api::vessels))
         .route("/api/v1/vessels/{id}", get(api::vessel))

@@ -60,6 +60,7 @@ reads are public. The vessel link's messages are also in `api/vessel-link.schema
         stream,
         api::coverage_history,
         api::post_samples,
+        api::get_samples,
         api::risk,
     ),
     components(

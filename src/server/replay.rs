@@ -339,6 +339,9 @@ async fn refuse_writes(mut requests: mpsc::Receiver<Request>, shutdown: Cancella
             Request::Samples { reply, .. } => {
                 let _ = reply.send(Err(refusal()));
             }
+            Request::RecentSamples { reply } => {
+                let _ = reply.send(Err(refusal()));
+            }
             // Unanswered: the handler then answers the recorded mission's
             // risk.
             Request::Belief { .. }

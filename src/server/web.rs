@@ -58,6 +58,11 @@ const FILES: &[(&str, &str, &str)] = &[
         "text/javascript; charset=utf-8",
         include_str!("../../web/replay.js"),
     ),
+    (
+        "belief.js",
+        "text/javascript; charset=utf-8",
+        include_str!("../../web/belief.js"),
+    ),
 ];
 
 /// What serves the page when it is not a coordinator (the default, with

@@ -35,6 +35,29 @@ pub struct LearningConfig {
     /// What the fleet covers: the belief, or (for comparison) the prior
     /// alone or the truth itself.
     pub cover: Cover,
+    /// Keep every sample and every belief with its uncertainty (for the
+    /// recording: [`LearnLog`]).
+    pub log: bool,
+}
+
+/// Every sample a run took and every belief it covered, in time order.
+#[derive(Debug, Clone, Default)]
+pub struct LearnLog {
+    pub samples: Vec<LoggedSample>,
+    /// The time of each fit, the density covered from then on, and the
+    /// mean belief's uncertainty.
+    pub beliefs: Vec<(f64, RiskField, crate::protocol::UncertaintyDocument)>,
+}
+
+/// One sample as a sensor would have reported it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LoggedSample {
+    pub t: f64,
+    /// Its vessel's index in the fleet.
+    pub vessel: usize,
+    pub at: Point,
+    pub value: f64,
+    pub sd: f64,
 }
 
 /// What the simulated fleet covers when the scenario has a truth.
@@ -61,6 +84,7 @@ impl LearningConfig {
             spacing: 10.0,
             kappa: 0.0,
             cover: Cover::Learned,
+            log: false,
         }
     }
 }
@@ -110,6 +134,9 @@ pub(super) struct Learning {
     pub(super) cover: RiskField,
     pub(super) samples: usize,
     pub(super) fits: usize,
+    /// The region's bounding box (where the uncertainty is mapped).
+    bounds: (Point, Point),
+    pub(super) log: Option<LearnLog>,
 }
 
 impl Learning {
@@ -142,6 +169,8 @@ impl Learning {
             cover,
             samples: 0,
             fits: 0,
+            bounds: (min, max),
+            log: config.log.then(LearnLog::default),
             config: config.clone(),
         })
     }
@@ -163,11 +192,20 @@ impl Learning {
             return false;
         }
         while self.next_sample <= t + 1e-9 {
-            for &q in at {
+            for (vessel, &q) in at.iter().enumerate() {
                 let value = self.measure(q);
                 if let Ok(s) = Sample::new(q, value, self.sd) {
                     self.learner.add(s);
                     self.samples += 1;
+                    if let Some(log) = &mut self.log {
+                        log.samples.push(LoggedSample {
+                            t,
+                            vessel,
+                            at: q,
+                            value,
+                            sd: self.sd,
+                        });
+                    }
                 }
             }
             self.next_sample += 1.0 / self.config.rate;
@@ -178,8 +216,14 @@ impl Learning {
         while self.next_fit <= t + 1e-9 {
             self.next_fit += self.config.refit;
         }
-        self.cover = self.learner.fit().density(self.config.kappa);
+        let belief = self.learner.fit();
+        self.cover = belief.density(self.config.kappa);
         self.fits += 1;
+        if let Some(log) = &mut self.log {
+            let (min, max) = self.bounds;
+            let grid = crate::mission::belief::uncertainty(&belief, min, max);
+            log.beliefs.push((t, self.cover.clone(), grid));
+        }
         true
     }
 

@@ -51,6 +51,20 @@ pub fn run_to_dir(
     let io = |e: std::io::Error| SimError::Io(format!("{}: {e}", out.display()));
     std::fs::create_dir_all(out).map_err(io)?;
     let started = std::time::Instant::now();
+    // A recording holds every sample and belief: the run keeps them.
+    let logged;
+    let config = match (&record, &config.learning) {
+        (Some(_), Some(l)) => {
+            let mut c = config.clone();
+            c.learning = Some(learn::LearningConfig {
+                log: true,
+                ..l.clone()
+            });
+            logged = c;
+            &logged
+        }
+        _ => config,
+    };
     let result = run(config, progress)?;
     let recording = match record {
         Some((dir, doc)) => Some(record::record(dir, config, doc, &result)?),

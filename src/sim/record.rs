@@ -13,15 +13,17 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+use super::learn::{Cover, LearnLog};
 use super::run::fleet_at;
 use super::{Config, Run, SimError, Tick, VesselSample};
-use crate::coverage::{Options, evaluate};
+use crate::coverage::{Options, RiskField, evaluate};
 use crate::geometry::Point;
 use crate::mission::scenario::{LocalScenario, evaluation_document};
 use crate::mission::{guidance_document, safety_document};
 use crate::protocol::{
-    ActuatorDocument, CellDocument, CommandDocument, CoverageDocument, MissionDocument,
-    PoseDocument, RiskDocument, Snapshot, SnapshotDocument, VesselStatusDocument,
+    ActuatorDocument, BeliefDocument, CellDocument, CommandDocument, CoverageDocument,
+    MissionDocument, PoseDocument, RiskDocument, SampleDocument, Snapshot, SnapshotDocument,
+    VesselStatusDocument,
 };
 use crate::recorder::messages::SimVesselRecord;
 use crate::recorder::{Entry, Recorder, RecorderConfig, Target};
@@ -50,8 +52,10 @@ pub fn record(
     );
     let mission = mission_of(config, doc);
     recorder.mission(0.0, mission.clone());
+    let mut learned = LearnReplay::new(config, run);
     for (k, tick) in run.ticks.iter().enumerate() {
-        if let Some(snapshot) = record_tick(&recorder, config, &mission, k, tick) {
+        learned.record_until(&recorder, config, tick.t);
+        if let Some(snapshot) = record_tick(&recorder, config, &mission, k, tick, &learned.cover) {
             recorder.record(Entry::Tick(Arc::new(snapshot)));
         }
     }
@@ -97,6 +101,7 @@ fn record_tick(
     mission: &MissionDocument,
     k: usize,
     tick: &Tick,
+    risk: &RiskField,
 ) -> Option<Snapshot> {
     let ids = &config.scenario.ids;
     let positions = tick.vessels.iter().map(|v| Point {
@@ -104,12 +109,7 @@ fn record_tick(
         y: v.state.y,
     });
     let fleet = fleet_at(config, positions)?;
-    let evaluation = evaluate(
-        &config.scenario.region,
-        &config.scenario.risk,
-        &fleet,
-        &Options::default(),
-    );
+    let evaluation = evaluate(&config.scenario.region, risk, &fleet, &Options::default());
     let cells = evaluation_document(&config.scenario.region, ids, &evaluation).cells;
     let mut vessels = Vec::with_capacity(ids.len());
     for (((id, v), cell), own) in ids
@@ -203,5 +203,72 @@ fn status(
         }),
         neighbours: None,
         quarantine: None,
+    }
+}
+
+/// A learning run's samples and beliefs, handed to the recorder in time
+/// order between the ticks, and the density covered at each tick (what
+/// its cells are of).
+struct LearnReplay<'a> {
+    log: Option<&'a LearnLog>,
+    cover: RiskField,
+    kappa: f64,
+    next_sample: usize,
+    next_belief: usize,
+}
+
+impl<'a> LearnReplay<'a> {
+    fn new(config: &Config, run: &'a Run) -> LearnReplay<'a> {
+        let learning = config.learning.as_ref();
+        let cover = match learning.map(|l| l.cover) {
+            Some(Cover::Truth) => learning.map(|l| l.truth.clone()),
+            _ => None,
+        };
+        LearnReplay {
+            log: run.learn_log.as_ref(),
+            cover: cover.unwrap_or_else(|| config.scenario.risk.clone()),
+            kappa: learning.map_or(0.0, |l| l.kappa),
+            next_sample: 0,
+            next_belief: 0,
+        }
+    }
+
+    /// Records the samples and beliefs up to mission time `t`.
+    fn record_until(&mut self, recorder: &Recorder, config: &Config, t: f64) {
+        let Some(log) = self.log else { return };
+        while let Some(s) = log.samples.get(self.next_sample)
+            && s.t <= t
+        {
+            let sample = SampleDocument {
+                vessel: config.scenario.ids[s.vessel].clone(),
+                t: s.t,
+                x: s.at.x,
+                y: s.at.y,
+                value: s.value,
+                sd: s.sd,
+            };
+            recorder.sample(s.t, &sample, "accepted");
+            self.next_sample += 1;
+        }
+        while let Some((at, density, grid)) = log.beliefs.get(self.next_belief)
+            && *at <= t
+        {
+            self.next_belief += 1;
+            self.cover = density.clone();
+            let samples = log.samples.iter().take_while(|s| s.t <= *at).count();
+            recorder.belief(
+                *at,
+                BeliefDocument {
+                    source: "learned".to_string(),
+                    risk: crate::mission::belief::risk_document(density),
+                    samples: samples as u64,
+                    fits: self.next_belief as u64,
+                    fitted_at: Some(*at),
+                    kappa: self.kappa,
+                    learning: true,
+                    uncertainty: Some(grid.clone()),
+                },
+            );
+        }
     }
 }

@@ -82,6 +82,8 @@ pub struct Run {
     pub safety: SafetyRecord,
     /// Samples taken and fits made, when the scenario has a truth.
     pub learned: Option<Learned>,
+    /// Every sample and belief, when the learning config asked to log.
+    pub learn_log: Option<super::learn::LearnLog>,
 }
 
 /// What a run with a truth sampled and fitted.
@@ -163,11 +165,13 @@ pub fn run(config: &Config, mut progress: impl FnMut(f64)) -> Result<Run, SimErr
     measures.r_error_max_after_20s = late.error.1.abs();
     measures.u_lag_max_after_20s = late.lag.0.abs();
     measures.r_lag_max_after_20s = late.lag.1.abs();
+    let learn_log = learning.as_mut().and_then(|l| l.log.take());
     Ok(Run {
         ticks,
         snapshots,
         measures,
         safety: monitor.record,
+        learn_log,
         learned: learning.map(|l| Learned {
             samples: l.samples,
             fits: l.fits,

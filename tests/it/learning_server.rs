@@ -271,3 +271,117 @@ async fn samples_on_the_vessel_link_are_taken_once_the_vessel_is_placed() {
         1.0
     );
 }
+
+/// What a learning coordinator shows and keeps besides the density: the
+/// belief's uncertainty (small where samples were taken, the prior's where
+/// none were), the newest samples (`GET /api/v1/samples`, in the order
+/// taken), and a recording with every sample judged (refusals with their
+/// code) and every belief taken up, each valid against its schema for
+/// Foxglove's reader.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_uncertainty_and_the_samples_are_served_and_recorded() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("seacover.toml");
+    std::fs::write(&file, format!("{FLAT}\n[learning]\nrefit = 1.0\n")).unwrap();
+    let data = dir.path().join("data");
+    let mut command = serve_command(&data, &file);
+    command.stderr(Stdio::null());
+    let (child, addr) = start(command);
+    let mut server = KillOnDrop(child);
+    let http = reqwest::Client::new();
+
+    // The south half, every 5 m; one source per row.
+    let t = mission_time(&http, &addr).await;
+    let mut posted = Vec::new();
+    for row in 0..10 {
+        let y = 5.0 * f64::from(row);
+        let samples: Vec<Value> = (0..=20)
+            .map(|i| {
+                let x = 5.0 * f64::from(i);
+                json!({"vessel": format!("survey-{row}"), "t": t, "x": x, "y": y,
+                       "value": truth(x, y), "sd": 0.1})
+            })
+            .collect();
+        let (status, answer) = post(&http, &addr, Value::from(samples.clone())).await;
+        assert_eq!((status, &answer["accepted"]), (200, &json!(21)), "{answer}");
+        posted.extend(samples);
+    }
+    let bad = json!([
+        {"vessel": "survey-0", "t": t, "x": 500, "y": 5, "value": 1, "sd": 0.1},
+        {"vessel": "survey-0", "t": t, "x": 5, "y": 5, "value": 1, "sd": 0}
+    ]);
+    let (_, answer) = post(&http, &addr, bad).await;
+    assert_eq!(answer["refused"].as_array().unwrap().len(), 2, "{answer}");
+
+    let recent: Value = get_json(&http, &format!("http://{addr}/api/v1/samples")).await;
+    assert_eq!(recent["samples"], Value::from(posted.clone()));
+
+    let risk_url = format!("http://{addr}/api/v1/risk");
+    let deadline = tokio::time::Instant::now() + std::time::Duration::from_secs(20);
+    let learned = loop {
+        let risk: Value = get_json(&http, &risk_url).await;
+        if risk["source"] == "learned" {
+            break risk;
+        }
+        assert!(tokio::time::Instant::now() < deadline, "no fit: {risk}");
+        tokio::time::sleep(std::time::Duration::from_millis(100)).await;
+    };
+    assert_eq!(learned["learning"], true);
+    let u = &learned["uncertainty"];
+    assert_eq!((u["nx"].as_u64(), u["ny"].as_u64()), (Some(40), Some(40)));
+    assert_eq!(u["step"].as_f64(), Some(2.5));
+    let sd: Vec<f64> = u["sd"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    assert_eq!(sd.len(), 1600);
+    assert!(sd.iter().all(|s| s.is_finite() && *s >= 0.0));
+    // Rows of 2.5 m from the south: the survey's (y < 45 m) against the
+    // north's beyond 70 m, where the nearest sample is 25 m away.
+    let mean = |rows: std::ops::Range<usize>| {
+        let n = rows.len() * 40;
+        rows.flat_map(|j| sd[j * 40..(j + 1) * 40].to_vec())
+            .sum::<f64>()
+            / n as f64
+    };
+    let (south, north) = (mean(0..18), mean(28..40));
+    assert!(
+        north > 10.0 * south,
+        "mean σ in the north {north}, in the surveyed south {south}"
+    );
+
+    // A graceful stop finishes the recording.
+    crate::common::process::signal(server.0.id(), "-TERM");
+    assert!(server.0.wait().unwrap().success());
+    let files: Vec<_> = std::fs::read_dir(data.join("recordings"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    assert_eq!(files.len(), 1, "{files:?}");
+    let recording = seacover::recorder::reader::Recording::open(&files[0]).unwrap();
+    use seacover::recorder::messages::{BELIEF, BeliefRecord, SAMPLE, SampleRecord};
+    let judged: Vec<SampleRecord> = recording
+        .messages(&|topic| topic == SAMPLE)
+        .map(|m| serde_json::from_slice(&m.unwrap().data).unwrap())
+        .collect();
+    let outcomes: Vec<&str> = judged.iter().map(|r| r.outcome.as_str()).collect();
+    assert_eq!(outcomes.len(), 212);
+    assert!(outcomes[..210].iter().all(|o| *o == "accepted"));
+    assert_eq!(outcomes[210..], ["outside_region", "invalid"]);
+    let beliefs: Vec<BeliefRecord> = recording
+        .messages(&|topic| topic == BELIEF)
+        .map(|m| serde_json::from_slice(&m.unwrap().data).unwrap())
+        .collect();
+    assert!(!beliefs.is_empty());
+    let last = serde_json::to_value(&beliefs[beliefs.len() - 1].belief).unwrap();
+    assert_eq!(last["source"], "learned");
+    assert_eq!(last["samples"], 210);
+    assert!(last["uncertainty"]["sd"].as_array().unwrap().len() == 1600);
+    if let Some(report) = crate::common::process::check_recording("learning_server", &files[0]) {
+        assert_eq!(report["invalid"], 0, "{report}");
+        assert_eq!(report["counts"][SAMPLE], 212, "{report}");
+        assert_eq!(report["counts"][BELIEF], beliefs.len(), "{report}");
+    }
+}

@@ -19,6 +19,7 @@ mod cli;
 mod curved;
 mod dashboard;
 mod dashboard_fleet;
+mod dashboard_learning;
 mod dashboard_ux;
 mod docs_numbers;
 mod engine;

@@ -639,3 +639,103 @@ fn a_geo_referenced_simulation_records_the_map_channels() {
     };
     assert_eq!((kinds("cell"), kinds("vessel")), (8, 8), "{cells}");
 }
+
+/// `sim --record` of a scenario with a truth also records what the fleet
+/// learned from: every sample its hulls took (at their true positions) and
+/// every belief it covered; each tick's cells are those of the belief
+/// covered then (the run's H), not of the scenario's prior.
+#[test]
+fn a_learning_simulation_records_its_samples_and_beliefs() {
+    use seacover::recorder::messages::{
+        BeliefRecord, CoverageRecord, SampleRecord, SimVesselRecord,
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let scenario = Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/examples/paper-learning.json"
+    ));
+    let file = crate::common::server::record_scenario(dir.path(), "learn", scenario, 12.0);
+    let learning: Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.path().join("learn/learning.json")).unwrap(),
+    )
+    .unwrap();
+    let recording = Recording::open(&file).unwrap();
+    let ours = counts(&recording);
+    assert_eq!(
+        ours[messages::SAMPLE],
+        learning["samples"].as_u64().unwrap(),
+        "{ours:?} {learning}"
+    );
+    assert_eq!(ours[messages::BELIEF], learning["fits"].as_u64().unwrap());
+    let truth: Vec<SimVesselRecord> = recording
+        .messages(&|t| t == messages::SIM_VESSEL)
+        .map(|m| serde_json::from_slice(&m.unwrap().data).unwrap())
+        .collect();
+    // Each sample where its hull was.
+    for m in recording.messages(&|t| t == messages::SAMPLE) {
+        let r: SampleRecord = serde_json::from_slice(&m.unwrap().data).unwrap();
+        assert_eq!(r.outcome, "accepted");
+        let hull = truth
+            .iter()
+            .find(|h| h.vessel == r.sample.vessel && (h.time - r.sample.t).abs() < 1e-9)
+            .unwrap_or_else(|| panic!("no hull for {:?}", r.sample));
+        assert_eq!([r.sample.x, r.sample.y], [hull.truth[0], hull.truth[1]]);
+    }
+    // The last tick's cells are of the last belief: their masses are the
+    // engine's over that belief at the recorded positions.
+    let beliefs: Vec<BeliefRecord> = recording
+        .messages(&|t| t == messages::BELIEF)
+        .map(|m| serde_json::from_slice(&m.unwrap().data).unwrap())
+        .collect();
+    let last = beliefs.last().unwrap();
+    assert_eq!(last.belief.fits as usize, beliefs.len());
+    let coverage: CoverageRecord = recording
+        .messages(&|t| t == messages::COVERAGE)
+        .last()
+        .map(|m| serde_json::from_slice(&m.unwrap().data).unwrap())
+        .unwrap();
+    assert!(last.time <= coverage.time);
+    let risk = seacover::mission::convert::risk_field(&last.belief.risk).unwrap();
+    let (scenario, _) = seacover::sim::load_scenario(scenario.to_str().unwrap()).unwrap();
+    let at_end: Vec<_> = truth
+        .iter()
+        .filter(|h| (h.time - coverage.time).abs() < 1e-9)
+        .collect();
+    let fleet = seacover::coverage::Fleet::new(
+        at_end
+            .iter()
+            .zip(scenario.fleet.vessels())
+            .map(|(h, v)| seacover::coverage::Vessel {
+                position: seacover::geometry::Point {
+                    x: h.truth[0],
+                    y: h.truth[1],
+                },
+                ..*v
+            })
+            .collect(),
+    )
+    .unwrap();
+    let eval = seacover::coverage::evaluate(
+        &scenario.region,
+        &risk,
+        &fleet,
+        &seacover::coverage::Options::default(),
+    );
+    for (cell, ours) in coverage.cells.iter().zip(&eval.cells) {
+        assert!(
+            (cell.mass - ours.mass).abs() <= 1e-9 * ours.mass.max(1.0),
+            "{}: recorded {} against {}",
+            cell.id,
+            cell.mass,
+            ours.mass
+        );
+    }
+    if let Some(report) = crate::common::process::check_recording("recording", &file) {
+        assert_eq!(report["invalid"], 0, "{report}");
+        assert_eq!(
+            report["counts"][messages::BELIEF],
+            beliefs.len(),
+            "{report}"
+        );
+    }
+}

@@ -12,6 +12,7 @@
 //! - [`scenario`]: scenario documents → validated core types → evaluation
 //!   documents; [`georef`]: WGS84 documents in, GeoJSON out;
 //! - [`builtin`]: the built-in scenarios (paper, harbour);
+//! - [`belief`]: a learned belief and its uncertainty as documents;
 //! - [`clock`]: the mission clock (mission seconds under a time warp).
 //!
 //! Invariants:
@@ -22,6 +23,7 @@
 //!   `invalid`, `unsupported`, `not_found`, `conflict`); the HTTP edge
 //!   converts it with one `From`.
 
+pub mod belief;
 pub mod builtin;
 mod change;
 pub mod clock;

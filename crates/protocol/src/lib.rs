@@ -30,6 +30,7 @@ pub use link::{
 };
 pub use sample::{
     BeliefDocument, SampleDocument, SampleRefusalDocument, SamplesAnswerDocument, SamplesDocument,
+    UncertaintyDocument,
 };
 
 use schemars::JsonSchema;

@@ -71,4 +71,28 @@ pub struct BeliefDocument {
     pub fitted_at: Option<f64>,
     /// Optimism: posterior standard deviations added (0: the mean).
     pub kappa: f64,
+    /// Whether the coordinator learns at all (`[learning]`).
+    #[serde(default)]
+    pub learning: bool,
+    /// The newest fit's uncertainty, when there is one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub uncertainty: Option<UncertaintyDocument>,
+}
+
+/// The posterior standard deviation of the mean belief's Φ, on a grid of
+/// square cells over the region's bounding box (docs/learning.md): where
+/// the fleet has measured, small; where it has not, the prior's.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
+pub struct UncertaintyDocument {
+    /// The south-west corner of the grid [m].
+    pub x0: f64,
+    pub y0: f64,
+    /// A cell's side [m].
+    pub step: f64,
+    /// Cells east and north.
+    pub nx: u32,
+    pub ny: u32,
+    /// σ at each cell's centre, row by row from the south, each row from
+    /// the west, in the density's units (`nx · ny` values).
+    pub sd: Vec<f64>,
 }

@@ -8,8 +8,12 @@
 //!   `seacover_samples_total{outcome}`;
 //! - one vessel's flood is refused for that vessel alone (a token bucket
 //!   each, in mission time);
-//! - memory is bounded: at most [`WINDOW`] samples (the newest) and
-//!   [`MAX_SOURCES`] buckets;
+//! - memory is bounded: at most [`WINDOW`] samples (the newest), their
+//!   [`RECENT`] newest as documents for the dashboard, and [`MAX_SOURCES`]
+//!   buckets;
+//! - the recording holds every sample taken and every refused one but
+//!   floods (those only counted: a flooding sensor must not fill the
+//!   disk), and every belief as it is taken up;
 //! - the tick never waits on a fit: a fit runs on the learner's thread
 //!   and its belief is taken up by the first tick after it ends; the
 //!   mission's own risk is covered until the first fit, and is the fit's
@@ -22,13 +26,17 @@ use crate::coverage::RiskField;
 use crate::geometry::Point;
 use crate::learning::{Lattice, Learner, Params, Sample};
 use crate::mission::Mission;
+use crate::mission::belief::{risk_document, uncertainty};
 use crate::protocol::{
-    BeliefDocument, RiskDocument, RiskObjectDocument, SampleDocument, SampleRefusalDocument,
-    SamplesAnswerDocument,
+    BeliefDocument, SampleDocument, SampleRefusalDocument, SamplesAnswerDocument, SamplesDocument,
+    UncertaintyDocument,
 };
+use crate::recorder::Recorder;
 
 /// The newest samples the learner keeps.
 const WINDOW: usize = 20_000;
+/// The newest samples kept as documents (`GET /api/v1/samples`).
+const RECENT: usize = 500;
 /// Vessels (sample sources) whose rate is tracked at once.
 const MAX_SOURCES: usize = 4_096;
 /// A vessel's samples per mission second, and its burst.
@@ -77,11 +85,14 @@ struct Job {
     samples: Vec<Sample>,
     kappa: f64,
     at: f64,
+    /// The region's bounding box, where the uncertainty is mapped.
+    bounds: (Point, Point),
 }
 
 /// A fit's result.
 struct Fitted {
     density: RiskField,
+    uncertainty: UncertaintyDocument,
     at: f64,
 }
 
@@ -105,10 +116,12 @@ impl Worker {
                     for s in job.samples {
                         learner.add(s);
                     }
-                    let density = learner.fit().density(job.kappa);
+                    let belief = learner.fit();
+                    let (min, max) = job.bounds;
                     if done
                         .send(Fitted {
-                            density,
+                            density: belief.density(job.kappa),
+                            uncertainty: uncertainty(&belief, min, max),
                             at: job.at,
                         })
                         .is_err()
@@ -141,9 +154,11 @@ impl Drop for Worker {
 pub(super) struct Learning {
     settings: LearnSettings,
     window: VecDeque<Sample>,
+    recent: VecDeque<SampleDocument>,
     buckets: HashMap<String, Bucket>,
     worker: Worker,
     belief: Option<RiskField>,
+    uncertainty: Option<UncertaintyDocument>,
     fits: u64,
     fitted_at: Option<f64>,
     next_fit: f64,
@@ -156,9 +171,11 @@ impl Learning {
         Learning {
             settings,
             window: VecDeque::new(),
+            recent: VecDeque::new(),
             buckets: HashMap::new(),
             worker: Worker::start(),
             belief: None,
+            uncertainty: None,
             fits: 0,
             fitted_at: None,
             next_fit: 0.0,
@@ -175,6 +192,7 @@ impl Learning {
     /// with the new prior and lattice before it is covered.
     pub(super) fn mission_changed(&mut self) {
         self.belief = None;
+        self.uncertainty = None;
         self.fresh = !self.window.is_empty();
         self.next_fit = 0.0;
     }
@@ -185,6 +203,7 @@ impl Learning {
         batch: Vec<SampleDocument>,
         mission: &Mission,
         now: f64,
+        recorder: &Recorder,
     ) -> SamplesAnswerDocument {
         let (min, max) = mission.region().bounds();
         let mut answer = SamplesAnswerDocument {
@@ -198,12 +217,20 @@ impl Learning {
                     if self.window.len() > WINDOW {
                         self.window.pop_front();
                     }
+                    recorder.sample(now, &s, "accepted");
+                    self.recent.push_back(s);
+                    if self.recent.len() > RECENT {
+                        self.recent.pop_front();
+                    }
                     self.fresh = true;
                     answer.accepted += 1;
                     metrics::counter!(crate::server::metrics::SAMPLES, "outcome" => "accepted")
                         .increment(1);
                 }
                 Err((code, reason)) => {
+                    if code != "flood" {
+                        recorder.sample(now, &s, code);
+                    }
                     metrics::counter!(crate::server::metrics::SAMPLES, "outcome" => code)
                         .increment(1);
                     answer.refused.push(SampleRefusalDocument {
@@ -298,13 +325,17 @@ impl Learning {
 
     /// At mission time `now`: takes a finished fit, and starts one when
     /// due and new samples have come.
-    pub(super) fn poll(&mut self, mission: &Mission, now: f64) {
+    pub(super) fn poll(&mut self, mission: &Mission, now: f64, recorder: &Recorder) {
         while let Ok(fitted) = self.worker.results.try_recv() {
             self.worker.busy = false;
             self.belief = Some(fitted.density);
+            self.uncertainty = Some(fitted.uncertainty);
             self.fits += 1;
             self.fitted_at = Some(fitted.at);
             metrics::counter!(crate::server::metrics::FITS).increment(1);
+            if recorder.is_on() {
+                recorder.belief(now, self.document(mission));
+            }
         }
         if self.worker.busy || !self.fresh || now < self.next_fit {
             return;
@@ -322,6 +353,7 @@ impl Learning {
             samples: self.window.iter().copied().collect(),
             kappa: self.settings.kappa,
             at: now,
+            bounds: (min, max),
         };
         if let Some(jobs) = &self.worker.jobs
             && jobs.try_send(job).is_ok()
@@ -341,6 +373,15 @@ impl Learning {
             fits: 0,
             fitted_at: None,
             kappa: 0.0,
+            learning: false,
+            uncertainty: None,
+        }
+    }
+
+    /// `GET /api/v1/samples`: the newest samples taken, oldest first.
+    pub(super) fn recent(&self) -> SamplesDocument {
+        SamplesDocument {
+            samples: self.recent.iter().cloned().collect(),
         }
     }
 
@@ -357,24 +398,8 @@ impl Learning {
             fits: self.fits,
             fitted_at: self.fitted_at,
             kappa: self.settings.kappa,
+            learning: true,
+            uncertainty: self.uncertainty.clone(),
         }
-    }
-}
-
-/// A density as a mission's risk document (objects without ids).
-fn risk_document(field: &RiskField) -> RiskDocument {
-    RiskDocument {
-        base: field.base(),
-        objects: field
-            .objects()
-            .iter()
-            .map(|o| RiskObjectDocument {
-                id: None,
-                x: o.center.x,
-                y: o.center.y,
-                alpha: o.alpha,
-                sigma: o.sigma,
-            })
-            .collect(),
     }
 }

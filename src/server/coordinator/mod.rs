@@ -105,6 +105,10 @@ pub enum Request {
         vessel: String,
         sample: crate::protocol::LinkSampleDocument,
     },
+    /// `GET /api/v1/samples`: the newest samples taken.
+    RecentSamples {
+        reply: oneshot::Sender<Result<crate::protocol::SamplesDocument, CoordinatorError>>,
+    },
     /// `GET /api/v1/risk`: the density the fleet covers.
     Belief {
         reply: oneshot::Sender<crate::protocol::BeliefDocument>,
@@ -511,22 +515,10 @@ impl Coordinator {
                 let outcome = self.change(&change);
                 let _ = reply.send(outcome);
             }
-            Request::Samples { samples, reply } => {
-                let now = self.time();
-                let outcome = match &mut self.learning {
-                    Some(l) => Ok(l.take(samples, &self.mission, now)),
-                    None => Err(CoordinatorError::NotLearning),
-                };
-                let _ = reply.send(outcome);
-            }
             Request::LinkSample { vessel, sample } => self.link_sample(vessel, sample),
-            Request::Belief { reply } => {
-                let doc = match &self.learning {
-                    Some(l) => l.document(&self.mission),
-                    None => learning::Learning::unlearned(&self.mission),
-                };
-                let _ = reply.send(doc);
-            }
+            learning @ (Request::Samples { .. }
+            | Request::RecentSamples { .. }
+            | Request::Belief { .. }) => self.on_learning_request(learning),
             Request::PeerNeighbours(counts) => {
                 for (id, n) in counts {
                     if let Some(entry) = self.vessels.get_mut(&id) {

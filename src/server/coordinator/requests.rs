@@ -6,7 +6,9 @@
 //! coordinator whose mission is only its start-up default re-tasks no
 //! vessel that names another mission, until an operator changes it.
 
-use super::{Coordinator, CoordinatorError, Entry, Hello, Outgoing, judging, mission_name};
+use super::{
+    Coordinator, CoordinatorError, Entry, Hello, Outgoing, Request, judging, mission_name,
+};
 use crate::control::guidance::{Agility, Guidance};
 use crate::mission::{ChangeResult, MissionChange};
 use crate::protocol::{AgilityDocument, CoordinatorMessage};
@@ -181,7 +183,7 @@ impl Coordinator {
                 ))
             }
             Some(l) => l
-                .take(vec![doc], &self.mission, now)
+                .take(vec![doc], &self.mission, now, &self.recorder)
                 .refused
                 .pop()
                 .map(|r| (r.code, r.reason)),
@@ -206,6 +208,36 @@ impl Coordinator {
             };
             let _ = link.tx.try_send(Outgoing::Notice(error));
             entry.sample_notice = Some(now);
+        }
+    }
+
+    /// The learner's requests: samples posted, the newest samples, the
+    /// belief.
+    pub(super) fn on_learning_request(&mut self, request: Request) {
+        match request {
+            Request::Samples { samples, reply } => {
+                let now = self.time();
+                let outcome = match &mut self.learning {
+                    Some(l) => Ok(l.take(samples, &self.mission, now, &self.recorder)),
+                    None => Err(CoordinatorError::NotLearning),
+                };
+                let _ = reply.send(outcome);
+            }
+            Request::RecentSamples { reply } => {
+                let recent = match &self.learning {
+                    Some(l) => Ok(l.recent()),
+                    None => Err(CoordinatorError::NotLearning),
+                };
+                let _ = reply.send(recent);
+            }
+            Request::Belief { reply } => {
+                let doc = match &self.learning {
+                    Some(l) => l.document(&self.mission),
+                    None => super::learning::Learning::unlearned(&self.mission),
+                };
+                let _ = reply.send(doc);
+            }
+            _ => {}
         }
     }
 }

@@ -129,7 +129,11 @@ impl Coordinator {
     ) -> Published {
         self.tick += advance;
         if let Some(l) = &mut self.learning {
-            l.poll(&self.mission, self.tick as f64 / self.mission.tick_hz());
+            l.poll(
+                &self.mission,
+                self.tick as f64 / self.mission.tick_hz(),
+                &self.recorder,
+            );
         }
         self.collect_poses();
         self.hold_quarantined(due, &written);

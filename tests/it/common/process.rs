@@ -54,3 +54,28 @@ pub(crate) fn venv_python(test: &str, modules: &[&str], what: &str) -> Option<Pa
     eprintln!("skipped: {test} needs {what} (run scripts/test, or set SEACOVER_PYTHON)");
     None
 }
+
+/// The independent reader's report of a recording
+/// (`tests/python/check_recording.py`: Foxglove's `mcap` and `jsonschema`):
+/// channels, counts and schema failures. `None` where [`venv_python`] is.
+pub(crate) fn check_recording(test: &str, file: &std::path::Path) -> Option<serde_json::Value> {
+    let python = venv_python(
+        test,
+        &["mcap", "jsonschema"],
+        "Python with Foxglove's mcap package and jsonschema",
+    )?;
+    let out = Command::new(python)
+        .arg(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/tests/python/check_recording.py"
+        ))
+        .arg(file)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    Some(serde_json::from_slice(&out.stdout).unwrap())
+}
