@@ -21,6 +21,7 @@ pub mod link;
 pub mod mavlink;
 mod onboard;
 pub mod peer;
+pub mod sensor;
 
 use std::time::Duration;
 

@@ -148,7 +148,7 @@ impl Learning {
     ) -> Result<Learning, InputError> {
         let (min, max) = region.bounds();
         let lattice = Lattice::over(min, max, config.spacing)?;
-        let range = range_over(&config.truth, region);
+        let range = config.truth.range_over(min, max);
         // A flat truth has no range: its noise is then a share of its level.
         let scale = if range > 0.0 {
             range
@@ -240,25 +240,4 @@ impl Learning {
             self.config.truth.value(q) + self.sd * noise
         }
     }
-}
-
-/// The truth's range (largest less smallest) on a 1 m grid of the
-/// region's bounding box, at most 500 × 500 points.
-fn range_over(field: &RiskField, region: &Region) -> f64 {
-    let (min, max) = region.bounds();
-    let steps = |a: f64, b: f64| ((b - a).ceil() as usize).clamp(1, 500);
-    let (nx, ny) = (steps(min.x, max.x), steps(min.y, max.y));
-    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-    for j in 0..=ny {
-        for i in 0..=nx {
-            let q = Point {
-                x: min.x + (max.x - min.x) * i as f64 / nx as f64,
-                y: min.y + (max.y - min.y) * j as f64 / ny as f64,
-            };
-            let v = field.value(q);
-            lo = lo.min(v);
-            hi = hi.max(v);
-        }
-    }
-    hi - lo
 }

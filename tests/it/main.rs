@@ -34,6 +34,7 @@ mod network;
 mod peer_coordinator;
 mod peer_faults;
 mod peer_fleet;
+mod peer_learning;
 mod peer_medium;
 mod peer_partition;
 mod peer_trust;

@@ -21,7 +21,8 @@
 //! - e. A range-limited radio (as MOOS-IvP's uFldNodeComms): pairs farther
 //!   apart than R are cut, from the positions the observer hears; the
 //!   coverage reached for each R against the centralized one.
-//! - g. The bandwidth each vessel uses at 5 Hz in real time.
+//! - g. The bandwidth each vessel uses at 5 Hz in real time, with samples
+//!   flowing (the fleet learning the risk map, every hull measuring at 1 Hz).
 //!
 //! Links: Zenoh's UDP unicast links, the peer default
 //! (`seacover::agent::peer::session::PEER_LISTEN`); d pins their port.
@@ -407,7 +408,10 @@ fn g_bandwidth_at_five_hertz() {
     let Some(python) = skip(test) else { return };
     let mut checks = Checks::new(test);
     let window = 20.0;
-    let setup = Setup::new("g", 1.0).status_every(0.5);
+    // Samples flowing: the fleet learns, each hull measuring at 1 Hz.
+    let mut setup = Setup::new("g", 1.0).status_every(0.5);
+    setup.mission = LEARNING;
+    setup.vessel_args = ["--learn", "--truth", LEARNING].map(String::from).to_vec();
     let args = setup.observer_args.clone();
     let mut fleet = Fleet::new(setup, &python);
     fleet.launch();
@@ -479,7 +483,7 @@ fn g_bandwidth_at_five_hertz() {
     let max_tx = rates.iter().map(|r| r.1).fold(0.0, f64::max);
     let bound = 1000.0 * (N - 1) as f64;
     eprintln!(
-        "SUMMARY {test}: time warp 1, UDP links (the peer default), 8 vessels at 5 Hz, formed in {formed_in:.1} s; \
+        "SUMMARY {test}: time warp 1, UDP links (the peer default), 8 vessels at 5 Hz, samples at 1 Hz, formed in {formed_in:.1} s; \
          over {secs:.1} s without the observer: {}; at most rx {max_rx:.0} B/s, tx {max_tx:.0} B/s \
          ({:.0} / {:.0} B/s per neighbour); beacons received per vessel per second (own \
          included) {received_rate:.1?}; partitions after {neighbours:?}",

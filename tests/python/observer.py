@@ -12,6 +12,8 @@ one JSON object per line, flushed per line, to ``--out FILE``:
   is not CBOR or not a map. Byte strings in the map are written as hex text,
   non-finite floats as the strings "NaN", "inf", "-inf", other keys than
   text as their ``str``.
+- ``seacover/<fleet>/sample/*`` (a CBOR array of maps): ``{"kind": "samples", "key",
+  "recv", "size", "samples": [decoded maps]}``, or ``undecodable`` as a beacon.
 - ``seacover/<fleet>/alive/*`` (liveliness, with history):
   ``{"kind": "alive" | "gone", "key", "recv"}``.
 - ``seacover/<fleet>/mission`` (a JSON document with an integer "revision"):
@@ -29,7 +31,8 @@ one JSON object per line, flushed per line, to ``--out FILE``:
   ``min(S, 2)`` s) writes ``{"kind": "status", "from": <reply key>, "sent":
   <UTC of the query>, "recv", "size", "status": {the JSON document}}`` per
   reply, or ``{"kind": "status_error", "from", "sent", "recv", "error"}`` for
-  a reply that is an error or not a JSON object.
+  a reply that is an error or not a JSON object. With ``--status-belief`` the
+  query asks for each vessel's learned belief too (``status/*?belief``).
 - with ``--peers-every S``, every S seconds ``{"kind": "peers", "zids":
   [<Zenoh ids of the sessions this one is linked to directly>], "recv"}``:
   a peer heard only through another (Zenoh's failover brokering) is not
@@ -69,6 +72,8 @@ def parse_args(argv):
                    help="query seacover/<fleet>/mission every S seconds")
     p.add_argument("--query-status-every", type=float, metavar="S",
                    help="query seacover/<fleet>/status/* every S seconds")
+    p.add_argument("--status-belief", action="store_true",
+                   help="ask the status queries for each vessel's belief")
     p.add_argument("--peers-every", type=float, metavar="S",
                    help="record the directly linked peers every S seconds")
     return p.parse_args(argv)
@@ -117,21 +122,22 @@ class Out:
                 self.file = None
 
 
-def on_beacon(out):
+def on_cbor(out, kind, shape):
+    """Writes each CBOR item of `shape` (dict or list) received as a record of `kind`."""
     def callback(sample):
         recv = time.time()
         data = sample.payload.to_bytes()
         key = str(sample.key_expr)
         try:
             value = cbor2.loads(data)
-            if not isinstance(value, dict):
-                raise ValueError(f"not a CBOR map but {type(value).__name__}")
+            if not isinstance(value, shape):
+                raise ValueError(f"not a CBOR {shape.__name__} but {type(value).__name__}")
         except Exception as e:  # noqa: BLE001 (any decoding failure is the finding)
             out.write({"kind": "undecodable", "key": key, "size": len(data),
                        "recv": recv, "error": str(e), "hex": data.hex()})
             return
-        out.write({"kind": "beacon", "key": key, "recv": recv, "size": len(data),
-                   "beacon": jsonable(value)})
+        out.write({"kind": kind, "key": key, "recv": recv, "size": len(data),
+                   kind: jsonable(value)})
     return callback
 
 
@@ -254,7 +260,8 @@ def main(argv):
     prefix = f"seacover/{args.fleet}"
     session = zenoh.open(make_config(args))
     subscribers = [
-        session.declare_subscriber(f"{prefix}/beacon/*", on_beacon(out)),
+        session.declare_subscriber(f"{prefix}/beacon/*", on_cbor(out, "beacon", dict)),
+        session.declare_subscriber(f"{prefix}/sample/*", on_cbor(out, "samples", list)),
         session.liveliness().declare_subscriber(f"{prefix}/alive/*", on_alive(out), history=True),
         session.declare_subscriber(f"{prefix}/mission", on_mission(out)),
     ]
@@ -279,10 +286,11 @@ def main(argv):
         timeout = max(0.1, min(args.query_mission_every, 5.0))
         threads.append(periodic(args.query_mission_every, timeout,
                                 lambda t: query_mission(session, f"{prefix}/mission", out, t)))
+    status = f"{prefix}/status/*" + ("?belief" if args.status_belief else "")
     if args.query_status_every:
         timeout = max(0.1, min(args.query_status_every, 2.0))
         threads.append(periodic(args.query_status_every, timeout,
-                                lambda t: query_status(session, f"{prefix}/status/*", out, t)))
+                                lambda t: query_status(session, status, out, t)))
     if args.peers_every:
         def peers(_timeout):
             zids = sorted(str(z) for z in session.info.peers_zid())

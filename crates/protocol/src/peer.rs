@@ -145,4 +145,52 @@ pub struct PeerStatusDocument {
     /// `--alone`).
     #[serde(default)]
     pub alone: bool,
+    /// What it learned of the risk field, when its fleet learns.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub learning: Option<PeerLearningDocument>,
+}
+
+/// A peer vessel's learner (docs/learning.md, "In a peer fleet").
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct PeerLearningDocument {
+    /// Samples it holds, from every source.
+    pub samples: u64,
+    /// Sources (vessels) it holds samples of.
+    pub sources: u64,
+    /// Fits made so far.
+    pub fits: u64,
+    /// A digest of the sample set the newest fit saw (hex): two vessels
+    /// that show the same digest hold the same belief, bit for bit.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub digest: Option<String>,
+    /// How many samples the newest fit saw.
+    pub fitted: u64,
+    /// The newest fit saw the samples taken up to this time (UTC, s since
+    /// 1970): the end of its epoch, the same for every member.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub until: Option<f64>,
+    /// The belief it covers; only when the status query asks for it
+    /// (`status/<id>?belief`), as it can be tens of kilobytes.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub belief: Option<crate::RiskDocument>,
+}
+
+/// `seacover/<fleet>/sample/<id>`: one measurement of the risk field by
+/// vessel `id`, as a CBOR map; its `n` counts that vessel's samples from 0,
+/// so a listener sees what it missed and asks `seacover/<fleet>/samples/<id>?from=N`
+/// (answered, by any member that holds them, with a CBOR array of these).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct PeerSampleDocument {
+    pub id: String,
+    /// The vessel's sample number, from 0.
+    pub n: u32,
+    /// When it was taken: the sender's UTC time [s since 1970].
+    pub t: f64,
+    /// Where, in the mission's local plane [m] (32-bit floats on the wire).
+    pub x: f64,
+    pub y: f64,
+    /// The value measured, and its standard deviation σ > 0 (32-bit).
+    pub value: f64,
+    pub sd: f64,
 }

@@ -554,7 +554,7 @@ async fn run_vehicle(
                                             })
                                         }
                                         // A peer node: the boat's own loop on board.
-                                        Some(m) => tokio::spawn(m.clone().link(config.vessel.clone(), slot, tx, config.astern.unwrap_or(true), stop.clone())),
+                                        Some(m) => tokio::spawn(m.clone().link(config.vessel.clone(), slot, tx, sample_queue, config.astern.unwrap_or(true), stop.clone())),
                                     });
                                 }
                             }

@@ -28,7 +28,9 @@ pub mod credentials;
 mod error;
 mod index;
 mod joining;
+pub mod learn;
 pub mod node;
+pub mod samples;
 pub mod session;
 pub mod split;
 pub mod step;
@@ -56,6 +58,13 @@ pub struct PeerConfig {
     /// whole region by itself would take it onto water a fleet it cannot
     /// hear is working.
     pub alone: bool,
+    /// Learn the risk map from the fleet's samples (`--learn`; every member
+    /// the same settings).
+    pub learning: Option<learn::LearnSettings>,
+    /// What the simulated vessels' sensors measure (`--truth`).
+    pub sensor: Option<crate::agent::sensor::SensorConfig>,
+    /// Seeds the simulated sensors' noise.
+    pub seed: u64,
 }
 
 impl PeerConfig {
@@ -71,6 +80,9 @@ impl PeerConfig {
             beacon_hz: 5.0,
             ageing: table::Ageing::default(),
             alone: false,
+            learning: None,
+            sensor: None,
+            seed: 1,
         })
     }
 }

@@ -21,9 +21,10 @@ use zenoh::query::ConsolidationMode;
 
 use super::board::{Board, Revision};
 use super::joining::Joining;
+use super::learn::{Learning, Outbox};
 use super::split::{Change, Split, Tick};
 use super::table::Table;
-use super::wire::{self, Keys};
+use super::wire::{self, Keys, utc_now};
 use super::{PeerConfig, PeerError};
 use crate::agent::VesselConfig;
 use crate::agent::onboard::Onboard;
@@ -31,13 +32,6 @@ use crate::control::barrier::Scratch;
 use crate::control::guidance::Guidance;
 use crate::coverage::split::Water;
 use crate::protocol::peer::{PeerStatusDocument, SplitWater};
-
-/// Seconds since 1970 by this machine's (disciplined) clock.
-pub fn utc_now() -> f64 {
-    std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0.0, |d| d.as_secs_f64())
-}
 
 /// What the fleet-wide declarations share with the vessels.
 struct Shared {
@@ -53,6 +47,8 @@ struct Shared {
     /// once, not at the next one-second poll.
     behind: tokio::sync::Notify,
     config: PeerConfig,
+    /// The learner, when the fleet learns.
+    learning: Option<Arc<Learning>>,
 }
 
 impl Shared {
@@ -170,6 +166,7 @@ impl Member {
             sent: Mutex::new(BTreeMap::new()),
             behind: tokio::sync::Notify::new(),
             config: config.clone(),
+            learning: config.learning.map(|s| Arc::new(Learning::new(s))),
         });
         if let Some(doc) = &config.mission {
             let bytes = serde_json::to_vec(doc).expect("documents serialize");
@@ -210,6 +207,13 @@ impl Member {
             session.clone(),
             shutdown.clone(),
         ));
+        if let Some(l) = &shared.learning {
+            let missions = shared.mission.subscribe();
+            let warp = config.time_warp;
+            super::learn::declare(l.clone(), &session, &keys, missions, warp, tasks, shutdown)
+                .await
+                .map_err(zerr)?;
+        }
         Ok(Arc::new(Member { session, shared }))
     }
 
@@ -239,12 +243,15 @@ impl Member {
     /// a speed, never a direction of thrust), as the coordinator does for
     /// a link that declares it. Without a mission, or without a pose newer
     /// than [`POSE_STALE`], it commands nothing, so the autopilot's own
-    /// timeout stops the boat.
+    /// timeout stops the boat. Its sensor's readings (`samples`, where the
+    /// boat was) go to the fleet's learner when the fleet learns.
+    #[allow(clippy::too_many_arguments)]
     pub async fn link(
         self: Arc<Self>,
         id: String,
         mut poses: watch::Receiver<Option<crate::protocol::PoseDocument>>,
         commands: tokio::sync::mpsc::Sender<crate::agent::link::Inbound>,
+        mut samples: Option<tokio::sync::mpsc::Receiver<crate::protocol::LinkSampleDocument>>,
         astern: bool,
         stop: CancellationToken,
     ) {
@@ -270,7 +277,7 @@ impl Member {
                     let period = v.current.as_ref().map_or(0.1, |r| 1.0 / r.mission.tick_hz());
                     let due = last_step.is_none_or(|l| p.t - l >= period - 1e-6 || p.t < l);
                     if due
-                        && let Some(command) = v.step(&self.shared, &state_of_pose(&p), p.t)
+                        && let Some(command) = v.step(&self.shared, &super::step::state_of_pose(&p), p.t)
                     {
                         last_step = Some(p.t);
                         let _ = commands.try_send(crate::agent::link::Inbound::Command(command));
@@ -279,10 +286,14 @@ impl Member {
                 }
                 Ok(()) = v.missions.changed() => v.take_mission(),
                 Ok(query) = v.status.recv_async() => v.answer(&self.shared, query).await,
+                Some(s) = async { match samples.as_mut() {
+                    Some(r) => r.recv().await,
+                    None => std::future::pending().await,
+                } } => v.measured(&self.shared, s.x, s.y, s.value, s.sd).await,
                 _ = beacons.tick() => {
                     if let Some((p, at)) = &pose && at.elapsed() < POSE_STALE {
                         let controlled = p.controlled.unwrap_or(true) && v.current.is_some();
-                        v.beacon(&self.shared, &state_of_pose(p), controlled).await;
+                        v.beacon(&self.shared, &super::step::state_of_pose(p), controlled).await;
                     }
                 }
             }
@@ -306,15 +317,6 @@ impl Member {
 
 /// A pose older than this is not announced nor steered by.
 pub const POSE_STALE: Duration = Duration::from_secs(2);
-
-fn state_of_pose(p: &crate::protocol::PoseDocument) -> crate::control::model::State {
-    crate::control::model::State {
-        x: p.x,
-        y: p.y,
-        psi: p.psi,
-        vel: crate::control::Vec3::new(p.u, p.v, p.r),
-    }
-}
 
 /// Runs `vessels` as members of the peer fleet until `shutdown`.
 pub async fn run(
@@ -367,6 +369,8 @@ struct Declared {
     /// While it (re)joins the fleet: it holds until its neighbourhood is
     /// heard whole (see [`Joining`]).
     joining: Option<Joining>,
+    /// Its samples' publisher, when the fleet learns.
+    outbox: Option<Outbox>,
 }
 
 impl Declared {
@@ -391,6 +395,10 @@ impl Declared {
             .declare_queryable(keys.status(id))
             .await
             .map_err(zerr)?;
+        let outbox = match &member.shared.learning {
+            Some(_) => Some(Outbox::declare(session, keys, id).await.map_err(zerr)?),
+            None => None,
+        };
         let mut missions = member.shared.mission.subscribe();
         let current = missions.borrow_and_update().clone();
         let guidance = current
@@ -415,6 +423,7 @@ impl Declared {
             split: Split::default(),
             alone: None,
             joining: Some(Joining::START),
+            outbox,
         })
     }
 
@@ -441,7 +450,11 @@ impl Declared {
             }
             self.joining = None;
             self.set_partition(0);
-            return Some(hold(self.ticks, own, "hears no other vessel of the fleet"));
+            return Some(super::step::hold(
+                self.ticks,
+                own,
+                "hears no other vessel of the fleet",
+            ));
         }
         if let Some(since) = self.alone.take() {
             tracing::info!(vessel = %self.id, held = t - since, heard, "hears the fleet: joining");
@@ -454,7 +467,7 @@ impl Declared {
         let joining = self.joining.as_mut()?;
         if !joining.settled(heard, t, ageing.stale_after) {
             self.set_partition(0);
-            return Some(hold(self.ticks, own, "joining the fleet"));
+            return Some(super::step::hold(self.ticks, own, "joining the fleet"));
         }
         tracing::info!(vessel = %self.id, joined_in = t - joining.began, heard, "heard the fleet whole: covering");
         self.joining = None;
@@ -486,6 +499,7 @@ impl Declared {
     }
 
     async fn answer(&self, shared: &Shared, query: zenoh::query::Query) {
+        let with_belief = query.parameters().contains_key("belief");
         let mut doc = status_document(
             shared,
             &self.id,
@@ -496,6 +510,12 @@ impl Declared {
         );
         doc.alone = self.alone.is_some();
         doc.partition_since = (self.partition_since > 0.0).then_some(self.partition_since);
+        if let Some(l) = &shared.learning {
+            doc.learning = Some(l.document(with_belief));
+            for (why, n) in l.refused() {
+                doc.refused.insert(why.to_string(), n);
+            }
+        }
         let json = serde_json::to_vec(&doc).expect("documents serialize");
         let _ = query.reply(shared.keys.status(&self.id), json).await;
     }
@@ -555,8 +575,16 @@ impl Declared {
         // The other group stays an obstacle where it fell silent too, not
         // only where the plan has it: two boats lost at once look like a
         // partition, and a wreck does not follow the plan.
+        // The belief fitted under this revision, once there is one; the
+        // mission's risk (its prior) until then.
+        let belief = shared
+            .learning
+            .as_ref()
+            .and_then(|l| l.belief(rev.revision));
+        let risk = belief.as_ref().map_or(rev.mission.risk(), |b| &b.density);
         let step = super::step::step(
             &rev.mission,
+            risk,
             own,
             actuator,
             &neighbours,
@@ -569,6 +597,13 @@ impl Declared {
         self.ticks += 1;
         self.set_partition(step.partition);
         Some(step.command)
+    }
+
+    /// A measurement of the risk field at (x, y), when the fleet learns.
+    async fn measured(&mut self, shared: &Shared, x: f64, y: f64, value: f64, sd: f64) {
+        if let (Some(outbox), Some(l)) = (self.outbox.as_mut(), &shared.learning) {
+            outbox.measured(l, x, y, value, sd).await;
+        }
     }
 
     /// Publishes the beacon of `s`: express and dropped on congestion, so
@@ -618,6 +653,10 @@ async fn run_vessel(
     let mut v = Declared::new(&member, &vessel.id).await?;
     let config = &shared.config;
     let mut onboard = Onboard::new(&vessel).without_keeper();
+    let mut sensor = config
+        .sensor
+        .as_ref()
+        .map(|s| crate::agent::sensor::Sensor::new(s, config.seed, &vessel.id));
     let period = 0.05; // the hull's step between looks at the world [s]
     let beacon_every = 1.0 / config.beacon_hz;
     let (mut next_beacon, mut next_control) = (0.0, 0.0);
@@ -631,6 +670,10 @@ async fn run_vessel(
             _ = ticker.tick() => {
                 onboard.advance(period);
                 let t = onboard.t;
+                let (x, y) = (onboard.state.x, onboard.state.y);
+                if let Some((value, sd)) = sensor.as_mut().and_then(|s| s.read(t, crate::geometry::Point { x, y })) {
+                    v.measured(&shared, x, y, value, sd).await;
+                }
                 if t + 1e-9 >= next_control {
                     let hz = v.current.as_ref().map_or(10.0, |r| r.mission.tick_hz());
                     next_control = t + 1.0 / hz;
@@ -699,26 +742,7 @@ fn status_document(
         }),
         alone: false,
         partition_since: None,
-    }
-}
-
-/// The command to keep station where the vessel is, and why.
-fn hold(
-    tick: u64,
-    own: &crate::control::model::State,
-    why: &str,
-) -> crate::protocol::CommandDocument {
-    crate::protocol::CommandDocument {
-        tick,
-        u_d: 0.0,
-        r_d: 0.0,
-        u_d_dot: 0.0,
-        r_d_dot: 0.0,
-        centroid: [own.x, own.y],
-        e: 0.0,
-        psi_e: 0.0,
-        hold: Some(why.into()),
-        station: None,
+        learning: None,
     }
 }
 

@@ -84,13 +84,15 @@ pub fn relevance(mission: &Mission, actuator: (f64, f64)) -> impl Fn(f64, f64) -
 }
 
 /// One tick: `own` is this vessel's state and actuator (k, β as the wire
-/// carries them), `t` its mission time, `tick` the command's number;
+/// carries them), `risk` the density it covers (the mission's, or the
+/// fleet's learned belief), `t` its mission time, `tick` the command's number;
 /// `orders` a split's plan's (the other group, silent in `neighbours`,
 /// then kept clear of twice: where it fell silent and where the plan has
 /// it).
 #[allow(clippy::too_many_arguments)]
 pub fn step(
     mission: &Mission,
+    risk: &crate::coverage::RiskField,
     own: &State,
     actuator: (f64, f64),
     neighbours: &[Neighbour],
@@ -120,8 +122,8 @@ pub fn step(
         .collect();
     let partition = fresh.len();
     let options = Options::default();
-    let cell = local_cell(mission.region(), mission.risk(), me, fresh, &options)
-        .or_else(|| local_cell(mission.region(), mission.risk(), me, [], &options))
+    let cell = local_cell(mission.region(), risk, me, fresh, &options)
+        .or_else(|| local_cell(mission.region(), risk, me, [], &options))
         .expect("a lone vessel of a valid mission is a valid fleet");
     let planned = orders.map_or(&[][..], |o| &o.others[..]);
     let mut states = Vec::with_capacity(neighbours.len() + planned.len() + 1);
@@ -179,5 +181,35 @@ pub fn step(
         },
         cell,
         partition,
+    }
+}
+
+/// A pose as the state the loop steps from.
+pub fn state_of_pose(p: &crate::protocol::PoseDocument) -> crate::control::model::State {
+    crate::control::model::State {
+        x: p.x,
+        y: p.y,
+        psi: p.psi,
+        vel: crate::control::Vec3::new(p.u, p.v, p.r),
+    }
+}
+
+/// The command to keep station where the vessel is, and why.
+pub fn hold(
+    tick: u64,
+    own: &crate::control::model::State,
+    why: &str,
+) -> crate::protocol::CommandDocument {
+    crate::protocol::CommandDocument {
+        tick,
+        u_d: 0.0,
+        r_d: 0.0,
+        u_d_dot: 0.0,
+        r_d_dot: 0.0,
+        centroid: [own.x, own.y],
+        e: 0.0,
+        psi_e: 0.0,
+        hold: Some(why.into()),
+        station: None,
     }
 }

@@ -23,6 +23,13 @@ pub const MAX_BEACON: usize = 96;
 /// The longest id of a peer fleet's vessel (the beacon's size bound).
 pub const MAX_ID: usize = 7;
 
+/// Seconds since 1970 by this machine's (disciplined) clock.
+pub fn utc_now() -> f64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0.0, |d| d.as_secs_f64())
+}
+
 /// Whether `id` can name a vessel of a peer fleet.
 pub fn valid_peer_id(id: &str) -> bool {
     id.len() <= MAX_ID && crate::mission::scenario::valid_id(id)
@@ -92,6 +99,21 @@ impl Keys {
     }
     pub fn status_all(&self) -> String {
         format!("seacover/{}/status/*", self.fleet)
+    }
+    /// Vessel `id`'s samples as it takes them.
+    pub fn sample(&self, id: &str) -> String {
+        format!("seacover/{}/sample/{id}", self.fleet)
+    }
+    pub fn sample_all(&self) -> String {
+        format!("seacover/{}/sample/*", self.fleet)
+    }
+    /// The queryable of vessel `id`'s samples (`?from=N`), answered by any
+    /// member that holds them.
+    pub fn samples(&self, id: &str) -> String {
+        format!("seacover/{}/samples/{id}", self.fleet)
+    }
+    pub fn samples_all(&self) -> String {
+        format!("seacover/{}/samples/*", self.fleet)
     }
     /// The fleet and the id of a beacon key, if it is one.
     pub fn parse_beacon(key: &str) -> Option<(&str, &str)> {

@@ -172,6 +172,86 @@ pub(crate) struct Fleet {
     pub(crate) name: String,
 }
 
+/// How a peer fleet learns the risk map, and what its simulated vessels
+/// measure (docs/learning.md, "In a peer fleet").
+#[derive(clap::Args, Debug, Clone)]
+#[command(next_help_heading = "Learning (with --peer)")]
+pub(crate) struct PeerLearnArgs {
+    /// Learn the risk map from the fleet's samples and cover the belief
+    /// (the mission's risk is the prior). Every member needs the same
+    /// learning flags: the belief is fitted with them.
+    #[arg(long, requires = "peer")]
+    learn: bool,
+    /// Optimism: posterior standard deviations added (0: the mean).
+    #[arg(long, value_name = "K", default_value_t = 0.0, requires = "learn")]
+    kappa: f64,
+    /// Mission seconds between fits.
+    #[arg(
+        long,
+        value_name = "SECONDS",
+        default_value_t = 5.0,
+        requires = "learn"
+    )]
+    refit: f64,
+    /// Spacing of the belief's lattice of Gaussians (and their spread) [m].
+    #[arg(long, value_name = "M", default_value_t = 10.0, requires = "learn")]
+    lattice: f64,
+    /// The simulated vessels measure this scenario's `truth` (the world's,
+    /// never given to the fleet) and share their samples.
+    #[arg(long, value_name = "FILE", requires = "learn")]
+    truth: Option<std::path::PathBuf>,
+    /// With --truth: readings per second per vessel.
+    #[arg(long, value_name = "HZ", default_value_t = 1.0, requires = "truth")]
+    sample_rate: f64,
+    /// With --truth: the readings' noise σ, as a share of the truth's range.
+    #[arg(long, value_name = "SHARE", default_value_t = 0.05, requires = "truth")]
+    sample_noise: f64,
+}
+
+impl PeerLearnArgs {
+    /// Onto a peer process's settings.
+    pub(crate) fn apply(
+        &self,
+        config: &mut seacover::agent::peer::PeerConfig,
+    ) -> anyhow::Result<()> {
+        if !self.learn {
+            return Ok(());
+        }
+        anyhow::ensure!(
+            (0.0..=10.0).contains(&self.kappa),
+            "--kappa must be in [0, 10]"
+        );
+        anyhow::ensure!(
+            (0.1..=3600.0).contains(&self.refit),
+            "--refit must be in [0.1, 3600] s"
+        );
+        anyhow::ensure!(
+            self.lattice.is_finite() && self.lattice > 0.0,
+            "--lattice must be a length > 0 m"
+        );
+        config.learning = Some(seacover::agent::peer::learn::LearnSettings {
+            kappa: self.kappa,
+            refit: self.refit,
+            lattice: self.lattice,
+        });
+        if let Some(path) = &self.truth {
+            let text = std::fs::read_to_string(path)
+                .map_err(|e| anyhow::anyhow!("--truth {}: {e}", path.display()))?;
+            config.sensor = Some(
+                seacover::agent::sensor::SensorConfig::of_scenario(
+                    &text,
+                    self.sample_rate,
+                    self.sample_noise,
+                )
+                .map_err(|e| {
+                    anyhow::anyhow!("--truth {}: {}", path.display(), seacover::chain::Chain(&e))
+                })?,
+            );
+        }
+        Ok(())
+    }
+}
+
 /// The Zenoh flags of `agent --peer` and `serve --peer`.
 #[derive(clap::Args, Debug, Clone)]
 pub(crate) struct ZenohArgs {

@@ -5,7 +5,9 @@ use std::path::PathBuf;
 
 use schemars::generate::SchemaSettings;
 use seacover::agent::peer::wire;
-use seacover::protocol::peer::{BeaconDocument, PeerMissionDocument, PeerStatusDocument};
+use seacover::protocol::peer::{
+    BeaconDocument, PeerMissionDocument, PeerSampleDocument, PeerStatusDocument,
+};
 use serde_json::{Value, json};
 
 use super::{
@@ -20,6 +22,7 @@ fn peer_wire_schema() -> String {
     let beacon = generator.subschema_for::<BeaconDocument>();
     let mission = generator.subschema_for::<PeerMissionDocument>();
     let status = generator.subschema_for::<PeerStatusDocument>();
+    let sample = generator.subschema_for::<PeerSampleDocument>();
     let mut defs = generator.take_definitions(true);
     let keyed = [
         (
@@ -49,6 +52,22 @@ fn peer_wire_schema() -> String {
              this document in JSON."
                 .to_string(),
         ),
+        (
+            "PeerSampleDocument",
+            "seacover/<fleet>/sample/<id>",
+            format!(
+                "Put by vessel <id>, in a fleet that learns (docs/learning.md), for its \
+                 measurements of the risk field every {} s, reliable but dropped on \
+                 congestion. Payload: a CBOR array of at most {} of these maps (each at most \
+                 {} bytes). A query on `seacover/<fleet>/samples/<id>?from=N` is answered by \
+                 every member that holds them with such an array, numbered N or more, at most \
+                 {} in an answer.",
+                seacover::agent::peer::learn::BATCH_EVERY,
+                seacover::agent::peer::samples::MAX_BATCH,
+                seacover::agent::peer::samples::MAX_SAMPLE,
+                seacover::agent::peer::samples::MAX_ANSWER
+            ),
+        ),
     ];
     for (name, key, lead) in keyed {
         let def = defs
@@ -70,6 +89,8 @@ fn peer_wire_schema() -> String {
          `seacover/<fleet>/alive/<id>`: a liveliness token (no payload), held while vessel <id> \
          runs. `seacover/<fleet>/mission`: a `PeerMissionDocument` in JSON. \
          `seacover/<fleet>/status/<id>`: a `PeerStatusDocument` in JSON, answered to queries. \
+         `seacover/<fleet>/sample/<id>`: an array of `PeerSampleDocument` in CBOR (a fleet \
+         that learns). \
          The key expression says which document a payload is; a beacon's CBOR map is \
          validated in its JSON form (text, unsigned integers, floats and booleans map one to \
          one). Shapes only: a member refuses, and counts by reason, a beacon over {} bytes, \
@@ -86,7 +107,7 @@ fn peer_wire_schema() -> String {
         "$schema": "https://json-schema.org/draft/2020-12/schema",
         "title": "seacover peer wire",
         "description": description,
-        "oneOf": [beacon, mission, status],
+        "oneOf": [beacon, mission, status, sample],
         "$defs": defs,
     });
     let mut text = serde_json::to_string_pretty(&schema).expect("the schema serializes");
@@ -330,11 +351,25 @@ fn the_peer_wire_schema_accepts_the_real_documents() {
             split: revision.map(|_| vec!["usv-5".to_string(), "usv-6".to_string()]),
             split_water: revision.map(|_| seacover::protocol::peer::SplitWater::Own),
             alone: revision.is_none(),
+            learning: None,
         })
         .unwrap()
     };
+    let sample_bytes = seacover::agent::peer::samples::encode(&[PeerSampleDocument {
+        id: "usv-1".into(),
+        n: 41,
+        t: 1_795_000_000.5,
+        x: 61.25,
+        y: 24.5,
+        value: 7.93,
+        sd: 0.65,
+    }]);
+    let sample_value: ciborium::Value = ciborium::from_reader(sample_bytes.as_slice()).unwrap();
+    let batch: Vec<Value> = sample_value.deserialized().unwrap();
+    let sample = batch[0].clone();
     let documents = [
         ("BeaconDocument", generic),
+        ("PeerSampleDocument", sample),
         ("PeerMissionDocument", mission),
         ("PeerStatusDocument", status(Some(7))),
         ("PeerStatusDocument", status(None)),
@@ -345,6 +380,7 @@ fn the_peer_wire_schema_accepts_the_real_documents() {
             "BeaconDocument",
             "PeerMissionDocument",
             "PeerStatusDocument",
+            "PeerSampleDocument",
         ] {
             let errors = checker.errors(&only(other), document);
             assert_eq!(

@@ -38,6 +38,8 @@ pub(crate) struct Setup {
     /// Whether the vessels start with the mission file (else they ask the
     /// fleet for it).
     pub mission_file: bool,
+    /// The mission file (the paper's unless told).
+    pub mission: &'static str,
     /// One vessel whose wall clock is off by this (libfaketime's offset,
     /// e.g. `+2s`; its monotonic clock untouched).
     pub clock_off: Option<(String, String)>,
@@ -53,6 +55,7 @@ impl Setup {
             vessel_args: Vec::new(),
             shore: false,
             mission_file: true,
+            mission: PAPER,
             clock_off: None,
         }
     }
@@ -86,6 +89,7 @@ pub(crate) struct Fleet {
     pub started: f64,
     pub vessel_args: Vec<String>,
     pub mission_file: bool,
+    pub mission: &'static str,
     pub clock_off: Option<(String, String)>,
     /// The shore process's host, with [`Setup::shore`].
     pub shore: Option<usize>,
@@ -128,6 +132,7 @@ impl Fleet {
             started: 0.0,
             vessel_args: setup.vessel_args,
             mission_file: setup.mission_file,
+            mission: setup.mission,
             clock_off: setup.clock_off,
             shore: setup.shore.then_some(hosts - 1),
             vessels: Vec::new(),
@@ -155,9 +160,9 @@ impl Fleet {
                 .args(["--start", &format!("{},{},{}", p.x, p.y, p.psi)])
                 .args(["--fleet", &self.name])
                 .args(if self.mission_file {
-                    &["--mission", PAPER][..]
+                    vec!["--mission", self.mission]
                 } else {
-                    &[]
+                    vec![]
                 })
                 .args(["--time-warp", &self.warp.to_string()])
                 .args(&self.vessel_args)

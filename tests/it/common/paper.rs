@@ -12,6 +12,10 @@ use serde_json::{Value, json};
 pub(crate) const BIN: &str = env!("CARGO_BIN_EXE_seacover");
 /// The paper's scenario: the mission file, and the vessels' starts.
 pub(crate) const PAPER: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/paper.json");
+/// The paper's square and fleet with a flat risk, the paper's map as its
+/// hidden `truth` (docs/learning.md).
+pub(crate) const LEARNING: &str =
+    concat!(env!("CARGO_MANIFEST_DIR"), "/examples/paper-learning.json");
 /// Mission seconds per wall second for every test but g's. Each vessel
 /// simulates its hull at 1 kHz of mission time: eight of them at 10 took
 /// about 1.2 of a 2-core machine's cores in a debug build, about 0.7 in the

@@ -96,6 +96,27 @@ impl RiskField {
                 .sum::<f64>()
     }
 
+    /// Φ's range (largest less smallest) over the box `min`–`max`, read on
+    /// a grid of at most 501 × 501 points 1 m apart or closer: what a
+    /// sensor's noise is given as a share of.
+    pub fn range_over(&self, min: Point, max: Point) -> f64 {
+        let steps = |a: f64, b: f64| ((b - a).ceil() as usize).clamp(1, 500);
+        let (nx, ny) = (steps(min.x, max.x), steps(min.y, max.y));
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for j in 0..=ny {
+            for i in 0..=nx {
+                let q = Point {
+                    x: min.x + (max.x - min.x) * i as f64 / nx as f64,
+                    y: min.y + (max.y - min.y) * j as f64 / ny as f64,
+                };
+                let v = self.value(q);
+                lo = lo.min(v);
+                hi = hi.max(v);
+            }
+        }
+        hi - lo
+    }
+
     /// Indices of the objects that can matter on the box [min, max]: every
     /// object left out is bounded on the box by `rel · φ0 / m` (m objects), so
     /// together they change any integral of f·Φ over the box by at most a

@@ -34,6 +34,8 @@ pub(crate) struct Args {
     start: Option<(f64, f64, f64)>,
     #[command(flatten)]
     zenoh: crate::shell::ZenohArgs,
+    #[command(flatten)]
+    learn: crate::shell::PeerLearnArgs,
     /// How many vessels (named usv-1 …), 8 unless told; the first eight
     /// start where the paper's do, further ones at random in the paper's
     /// region. With --peer and a scenario as --mission, unless told: the
@@ -179,6 +181,8 @@ async fn peer(args: Args) -> anyhow::Result<()> {
     let mut config = seacover::agent::peer::PeerConfig::new(args.fleet.name, args.zenoh.options())?;
     config.time_warp = args.time_warp.factor;
     config.alone = args.alone;
+    config.seed = args.seed;
+    args.learn.apply(&mut config)?;
     // Beacons are aged in mission seconds.
     config.ageing.warp = args.time_warp.factor;
     if let Some(path) = &args.mission {
@@ -210,6 +214,7 @@ async fn bridge(args: Args) -> anyhow::Result<()> {
         let mut config =
             seacover::agent::peer::PeerConfig::new(args.fleet.name.clone(), args.zenoh.options())?;
         config.alone = args.alone;
+        args.learn.apply(&mut config)?;
         if let Some(path) = &args.mission {
             config.mission = Some(seacover::agent::peer::mission_file(path)?);
         }
