@@ -16,8 +16,9 @@
 //!   read back (replay, `seacover record`); nobody waits on its disk;
 //! - the shell: [`sim`] (the closed loop in one process), [`agent`]
 //!   (simulated vessels and the MAVLink bridge on coordinator links),
-//!   [`server`] (the coordinator: one tick task owns the state) and [`load`]
-//!   (`seacover bench load`);
+//!   [`server`] (the coordinator: one tick task owns the state), [`load`]
+//!   (`seacover bench load`) and [`raster`] (GeoTIFF risk maps fitted as a
+//!   mission's risk);
 //! - [`demo`]: `seacover demo`, the coordinator and eight simulated vessels
 //!   on loopback in one process.
 //!
@@ -28,6 +29,7 @@ pub mod agent;
 pub mod chain;
 pub mod demo;
 pub mod load;
+pub mod raster;
 pub mod recorder;
 pub mod server;
 pub mod sim;

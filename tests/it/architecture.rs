@@ -23,7 +23,7 @@ const LAYERS: &[(&str, &[&str])] = &[
     ("protocol", &["protocol"]),
     ("mission", &["mission"]),
     ("recorder", &["recorder", "chain"]),
-    ("shell", &["sim", "agent", "server", "load"]),
+    ("shell", &["sim", "agent", "server", "load", "raster"]),
     ("demo", &["demo"]),
 ];
 

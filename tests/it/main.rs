@@ -41,6 +41,7 @@ mod peer_trust;
 mod persistence;
 mod properties;
 mod recording;
+mod risk_raster;
 mod safety;
 mod shutdown;
 mod sim;

@@ -10,7 +10,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
-use commands::{agent, bench, demo, evaluate, fleet, record, replay, serve, sim};
+use commands::{agent, bench, demo, evaluate, fleet, record, replay, risk, serve, sim};
 
 #[derive(Parser)]
 #[command(
@@ -53,6 +53,12 @@ enum Command {
         #[command(subcommand)]
         what: record::Command,
     },
+    /// Risk maps from GIS: `risk fit FILE.tif --mission M` fits a GeoTIFF
+    /// as the mission's risk.
+    Risk {
+        #[command(subcommand)]
+        what: risk::Command,
+    },
     /// What a peer fleet needs before it sails: `fleet credentials DIR`.
     Fleet {
         #[command(subcommand)]
@@ -72,7 +78,10 @@ enum Command {
 fn main() -> ExitCode {
     shell::zenoh_runtime();
     let cli = Cli::parse();
-    let quiet = matches!(cli.command, Command::Evaluate(_) | Command::Sim(_));
+    let quiet = matches!(
+        cli.command,
+        Command::Evaluate(_) | Command::Sim(_) | Command::Risk { .. }
+    );
     let filter = tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| {
         // Zenoh's own info lines (its id, every endpoint, scouting) are
         // for debugging Zenoh; ours say what a member does.
@@ -94,6 +103,7 @@ fn main() -> ExitCode {
         Command::Demo(args) => shell::report(shell::block_on(demo::run(args))),
         Command::Replay(args) => shell::report(shell::block_on(replay::run(args))),
         Command::Record { what } => shell::report(record::run(what)),
+        Command::Risk { what } => shell::report(risk::run(what)),
         Command::Fleet { what } => shell::report(fleet::run(what)),
         Command::Bench { kind } => shell::report(shell::block_on(bench::run(kind))),
         Command::Sim(args) => sim::run(args),

@@ -7,5 +7,6 @@ pub(crate) mod evaluate;
 pub(crate) mod fleet;
 pub(crate) mod record;
 pub(crate) mod replay;
+pub(crate) mod risk;
 pub(crate) mod serve;
 pub(crate) mod sim;

@@ -1,0 +1,217 @@
+//! `seacover risk fit` as a user runs it (docs/rasters.md): GeoTIFFs written
+//! by rasterio (GDAL) of a known field round SITL's home, in EPSG:4326 and
+//! in its UTM zone, fitted by the real binary against a mission over the
+//! same place; the written risk is checked against the field's own formula
+//! here, and what is not supported must be refused in words.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use serde_json::{Value, json};
+
+use crate::common::process::venv_python;
+use crate::common::sitl::ORIGIN;
+
+/// SITL's home is at 149.17° E, 35.36° S: UTM zone 55 south.
+const UTM: &str = "EPSG:32755";
+
+/// The field the rasters hold, in the mission's plane [m]: three Gaussians
+/// on a base, of spreads a lattice of ~7 m can follow.
+fn field() -> Value {
+    json!({
+        "base": 0.5,
+        "objects": [
+            {"x": -40.0, "y": 30.0, "alpha": 8.0, "sigma": 25.0},
+            {"x": 45.0, "y": -35.0, "alpha": 5.0, "sigma": 30.0},
+            {"x": 20.0, "y": 55.0, "alpha": 3.0, "sigma": 15.0},
+        ]
+    })
+}
+
+/// A risk document's (or the field's) value at (x, y).
+fn value(doc: &Value, x: f64, y: f64) -> f64 {
+    let objects = doc["objects"].as_array().unwrap();
+    doc["base"].as_f64().unwrap()
+        + objects
+            .iter()
+            .map(|o| {
+                let f = |k: &str| o[k].as_f64().unwrap();
+                let d2 = (x - f("x")).powi(2) + (y - f("y")).powi(2);
+                f("alpha") * (-d2 / (2.0 * f("sigma").powi(2))).exp()
+            })
+            .sum::<f64>()
+}
+
+/// A mission round SITL's home, as `serve --config` reads it: a 200 m
+/// square with a hole, so that the error is measured inside the region
+/// only.
+fn mission(dir: &Path, origin: bool) -> PathBuf {
+    let origin = if origin {
+        format!("origin = {{ lat = {}, lon = {} }}\n", ORIGIN.0, ORIGIN.1)
+    } else {
+        String::new()
+    };
+    let text = format!(
+        "{origin}[region]\n\
+         polygon = [[-100, -100], [100, -100], [100, 100], [-100, 100]]\n\
+         holes = [[[60, 60], [80, 60], [80, 80], [60, 80]]]\n"
+    );
+    let path = dir.join(if origin.is_empty() {
+        "local.toml"
+    } else {
+        "mission.toml"
+    });
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// Writes a raster of [`field`] with `tests/python/write_raster.py`.
+fn write(python: &Path, out: &Path, crs: &str, pixel: f64, extra: &[&str]) {
+    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/python/write_raster.py");
+    let run = Command::new(python)
+        .arg(script)
+        .arg(out)
+        .args(["--crs", crs, "--half", "130", "--pixel", &pixel.to_string()])
+        .args(["--origin", &ORIGIN.0.to_string(), &ORIGIN.1.to_string()])
+        .args(["--field", &field().to_string()])
+        .args(extra)
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "write_raster.py {crs} {extra:?}: {}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+}
+
+fn fit(raster: &Path, mission: &Path, out: Option<&Path>) -> Output {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_seacover"));
+    command
+        .args(["risk", "fit"])
+        .arg(raster)
+        .arg("--mission")
+        .arg(mission);
+    if let Some(out) = out {
+        command.arg("--out").arg(out);
+    }
+    command.output().unwrap()
+}
+
+/// The RMS and max error [%] of the summary's last line.
+fn errors(stderr: &str) -> (f64, f64) {
+    let last = stderr.lines().last().expect("a summary");
+    let after = |key: &str| -> f64 {
+        let rest = &last[last.find(key).unwrap_or_else(|| panic!("{key} in {last}")) + key.len()..];
+        rest.split_whitespace().next().unwrap().parse().unwrap()
+    };
+    (after("RMS "), after("max "))
+}
+
+/// Fits `raster` and checks the error the binary reports and the written
+/// risk against the field at points across the region.
+fn check_fit(dir: &Path, raster: &Path) -> (f64, f64) {
+    let out = dir.join("risk.json");
+    let run = fit(raster, &mission(dir, true), Some(&out));
+    let stderr = String::from_utf8_lossy(&run.stderr).to_string();
+    assert!(run.status.success(), "{stderr}");
+    eprintln!("{stderr}");
+    let (rms, max) = errors(&stderr);
+    // Measured: RMS 0.004–0.01 %, max 0.03–0.08 % (docs/rasters.md).
+    assert!(
+        rms < 0.05 && max < 0.5,
+        "RMS {rms} %, max {max} %: {stderr}"
+    );
+    let risk: Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let truth = field();
+    let range = 8.0 + 0.5; // the field's largest value is near 8.5, its least 0.5
+    for (x, y) in [
+        (0.0, 0.0),
+        (-40.0, 30.0),
+        (45.0, -35.0),
+        (20.0, 55.0),
+        (-90.0, -90.0),
+        (90.0, -90.0),
+        (-95.0, 95.0),
+        (10.0, -60.0),
+    ] {
+        let (got, want) = (value(&risk, x, y), value(&truth, x, y));
+        assert!(
+            (got - want).abs() < 0.005 * range,
+            "at ({x}, {y}): fitted {got}, field {want}"
+        );
+    }
+    (rms, max)
+}
+
+#[test]
+fn rasters_in_wgs84_and_utm_fit_the_field() {
+    let Some(python) = venv_python("risk_raster", &["rasterio"], "rasterio") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let geographic = dir.path().join("wgs84.tif");
+    write(&python, &geographic, "EPSG:4326", 2.0, &[]);
+    let (rms, max) = check_fit(dir.path(), &geographic);
+    eprintln!("EPSG:4326: RMS {rms} %, max {max} %");
+    // NoData inside the region: skipped, or its −9999 would be refused.
+    // Pixels of 1 m: samples are means of 2 × 2 pixels.
+    let projected = dir.path().join("utm.tif");
+    write(
+        &python,
+        &projected,
+        UTM,
+        1.0,
+        &["--nodata-box", "-20", "-80", "0", "-60"],
+    );
+    let (rms, max) = check_fit(dir.path(), &projected);
+    eprintln!("{UTM}: RMS {rms} %, max {max} %");
+}
+
+/// Runs a fit that must fail and returns its message.
+fn refused(raster: &Path, mission: &Path) -> String {
+    let run = fit(raster, mission, None);
+    let stderr = String::from_utf8_lossy(&run.stderr).to_string();
+    assert_eq!(run.status.code(), Some(2), "{stderr}");
+    assert!(run.stdout.is_empty(), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    stderr
+}
+
+#[test]
+fn unsupported_rasters_are_refused_in_words() {
+    let Some(python) = venv_python("risk_raster", &["rasterio"], "rasterio") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let with_origin = mission(d, true);
+    let cases: [(&str, &str, &[&str], &str); 4] = [
+        ("bands.tif", UTM, &["--bands", "3"], "has 3 bands"),
+        (
+            "mercator.tif",
+            "EPSG:3857",
+            &[],
+            "coordinate reference system EPSG:3857 is not supported",
+        ),
+        (
+            "rotated.tif",
+            UTM,
+            &["--rotate", "10"],
+            "only north-up rasters are supported",
+        ),
+        ("negative.tif", UTM, &["--negative"], "must be finite, ≥ 0"),
+    ];
+    for (name, crs, extra, expected) in cases {
+        let path = d.join(name);
+        write(&python, &path, crs, 2.0, extra);
+        let message = refused(&path, &with_origin);
+        assert!(message.contains(expected), "{name}: {message}");
+        assert!(message.starts_with("seacover: "), "{name}: {message}");
+    }
+    let good = d.join("good.tif");
+    write(&python, &good, "EPSG:4326", 2.0, &[]);
+    let message = refused(&good, &mission(d, false));
+    assert!(message.contains("the mission has no origin"), "{message}");
+    let message = refused(&d.join("missing.tif"), &with_origin);
+    assert!(message.contains("missing.tif: No such file"), "{message}");
+}
