@@ -200,6 +200,7 @@ fn peer(c: &mut Criterion) {
             let mut g = Guidance::new(m.guidance());
             step(
                 m,
+                m.risk(),
                 &node.own,
                 node.actuator,
                 neighbours,
@@ -248,6 +249,7 @@ fn peer(c: &mut Criterion) {
                 );
                 black_box(step(
                     &node.mission,
+                    node.mission.risk(),
                     &node.own,
                     node.actuator,
                     &neighbours,
@@ -281,6 +283,7 @@ fn peer(c: &mut Criterion) {
                     t += 0.1;
                     black_box(step(
                         &node.mission,
+                        node.mission.risk(),
                         &node.own,
                         node.actuator,
                         black_box(neighbours),

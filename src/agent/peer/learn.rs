@@ -370,9 +370,23 @@ impl Outbox {
         }
         self.n = self.n.wrapping_add(1);
         self.batch.push(doc);
-        if self.batch.len() < samples::MAX_BATCH && now - self.batch[0].t < BATCH_EVERY {
-            return;
+        if self.batch.len() >= samples::MAX_BATCH {
+            self.flush().await;
+        } else {
+            self.flush_due(now).await;
         }
+    }
+
+    /// Sends the batch once its oldest sample has waited [`BATCH_EVERY`]
+    /// (called at each beacon too, so that a sensor that falls silent
+    /// does not leave its last samples waiting).
+    pub async fn flush_due(&mut self, now: f64) {
+        if self.batch.first().is_some_and(|d| now - d.t >= BATCH_EVERY) {
+            self.flush().await;
+        }
+    }
+
+    async fn flush(&mut self) {
         let batch = std::mem::take(&mut self.batch);
         if let Err(e) = self.publisher.put(samples::encode(&batch)).await {
             tracing::debug!(vessel = %self.id, error = %e, "samples not sent");

@@ -627,6 +627,9 @@ impl Declared {
             },
         );
         self.seq = self.seq.wrapping_add(1);
+        if let Some(outbox) = self.outbox.as_mut() {
+            outbox.flush_due(utc_now()).await;
+        }
         let bytes = wire::encode(&doc);
         shared
             .sent
