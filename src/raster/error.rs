@@ -70,6 +70,12 @@ pub enum RasterError {
         northing: f64,
         source: proj4rs::errors::Error,
     },
+    /// The document naming a raster is not a valid mission once the
+    /// raster's place is taken by a flat risk.
+    #[error("the document naming the raster")]
+    Mission {
+        source: crate::mission::MissionError,
+    },
     /// The fit's lattice spacing does not suit the region.
     #[error("the fit's lattice")]
     Spacing { source: crate::coverage::InputError },

@@ -7,7 +7,8 @@
 //! be a density), `crs` (the GeoKeys; EPSG:4326 and the WGS84 UTM zones, to
 //! WGS84),
 //! `fit` (pixels into the mission's plane, samples, the engine's learner,
-//! the error) and `error` ([`RasterError`]).
+//! the error), `document` (a mission or scenario document naming a raster
+//! for its risk or truth, [`resolve`]) and `error` ([`RasterError`]).
 //!
 //! Invariants: whatever is not supported (several bands, another CRS, a
 //! rotated grid, a value that is negative or not finite) is refused with a
@@ -18,11 +19,13 @@
 //! file.
 
 mod crs;
+mod document;
 mod error;
 mod fit;
 mod read;
 
 pub use crs::Crs;
+pub use document::resolve;
 pub use error::RasterError;
 pub use fit::{Fit, fit};
 pub use read::Raster;

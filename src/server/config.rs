@@ -154,6 +154,11 @@ pub enum ConfigError {
     },
     #[error("{path}")]
     Invalid { path: PathBuf, source: ApiError },
+    #[error("{path}: its risk's raster")]
+    Raster {
+        path: PathBuf,
+        source: crate::raster::RasterError,
+    },
 }
 
 impl Settings {
@@ -163,6 +168,7 @@ impl Settings {
             path: path.to_path_buf(),
             source,
         })?;
+        let text = Settings::with_raster(&text, path)?;
         Settings::parse(&text).map_err(|e| match e {
             ParseError::Syntax(source) => ConfigError::Syntax {
                 path: path.to_path_buf(),
@@ -173,6 +179,48 @@ impl Settings {
                 source,
             },
         })
+    }
+
+    /// `text` with a `[risk]` that names a raster (`raster = "FILE.tif"`,
+    /// relative to the file's directory, and optionally `spacing = M`)
+    /// replaced by the raster's fit in the file's region and origin
+    /// (docs/rasters.md); any other text as it is.
+    fn with_raster(text: &str, path: &Path) -> Result<String, ConfigError> {
+        let Ok(mut table) = text.parse::<toml::Table>() else {
+            return Ok(text.to_string());
+        };
+        let Some(risk) = table.get("risk").and_then(toml::Value::as_table) else {
+            return Ok(text.to_string());
+        };
+        let Some(file) = risk.get("raster").and_then(toml::Value::as_str) else {
+            return Ok(text.to_string());
+        };
+        let spacing = risk
+            .get("spacing")
+            .and_then(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)));
+        let raster_path = path.parent().unwrap_or(Path::new(".")).join(file);
+        table.remove("risk");
+        let invalid = |e| match e {
+            ParseError::Syntax(source) => ConfigError::Syntax {
+                path: path.to_path_buf(),
+                source,
+            },
+            ParseError::Invalid(source) => ConfigError::Invalid {
+                path: path.to_path_buf(),
+                source,
+            },
+        };
+        let placed = Settings::parse(&table.to_string()).map_err(invalid)?;
+        let raster_error = |source| ConfigError::Raster {
+            path: path.to_path_buf(),
+            source,
+        };
+        let raster = crate::raster::Raster::read(&raster_path).map_err(raster_error)?;
+        let fitted = crate::raster::fit(&raster, &placed.mission, spacing).map_err(raster_error)?;
+        let doc = crate::mission::belief::risk_document(&fitted.risk);
+        let value = toml::Value::try_from(&doc).expect("a risk document is TOML");
+        table.insert("risk".to_string(), value);
+        Ok(table.to_string())
     }
 
     /// Parses and validates the text of a configuration file.

@@ -106,6 +106,8 @@ pub enum SimError {
     Io(String),
     #[error("drawing {0}")]
     Figure(String),
+    #[error("the scenario's raster")]
+    Raster(#[from] crate::raster::RasterError),
 }
 
 /// Where random starts of a built-in scenario are drawn: the harbour's fleet
@@ -133,11 +135,15 @@ pub fn load_scenario_document(
 ) -> Result<crate::mission::scenario::LocalScenario, SimError> {
     let (text, keep) = match crate::mission::builtin::scenario(spec) {
         Some((text, keep)) => (text.to_string(), keep),
-        None => (
-            std::fs::read_to_string(spec)
-                .map_err(|e| SimError::Io(format!("cannot read {spec}: {e}")))?,
-            usize::MAX,
-        ),
+        None => {
+            let text = std::fs::read_to_string(spec)
+                .map_err(|e| SimError::Io(format!("cannot read {spec}: {e}")))?;
+            // A risk or truth that names a raster is fitted from it.
+            let dir = std::path::Path::new(spec)
+                .parent()
+                .unwrap_or(std::path::Path::new("."));
+            (crate::raster::resolve(&text, dir)?, usize::MAX)
+        }
     };
     let mut doc = crate::mission::scenario::parse_document(&text)?;
     doc.vessels.truncate(keep);

@@ -215,3 +215,81 @@ fn unsupported_rasters_are_refused_in_words() {
     let message = refused(&d.join("missing.tif"), &with_origin);
     assert!(message.contains("missing.tif: No such file"), "{message}");
 }
+
+/// A raster named where a risk goes is fitted in its place: `[risk] raster
+/// = …` in `serve --config` (the served mission's risk is the field), and
+/// `"risk"`/`"truth": {"raster": …}` in a scenario for `seacover sim` (which
+/// then learns the raster's truth from a flat prior). Paths are the file's
+/// directory's.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_raster_named_in_a_mission_file_is_its_risk() {
+    let Some(python) = venv_python("risk_raster", &["rasterio"], "rasterio") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write(&python, &d.join("wgs84.tif"), "EPSG:4326", 2.0, &[]);
+    let config = mission(d, true);
+    let text = std::fs::read_to_string(&config).unwrap();
+    std::fs::write(&config, format!("{text}[risk]\nraster = \"wgs84.tif\"\n")).unwrap();
+    let mut command = crate::common::server::serve_command(&d.join("data"), &config);
+    command
+        .arg("--no-record")
+        .stderr(std::process::Stdio::piped());
+    let (child, addr) = crate::common::server::start(command);
+    let _server = crate::common::process::KillOnDrop(child);
+    let http = reqwest::Client::new();
+    let served: Value =
+        crate::common::server::get_json(&http, &format!("http://{addr}/api/v1/mission")).await;
+    let range = 8.0 + 0.5;
+    for (x, y) in [(0.0, 0.0), (-40.0, 30.0), (45.0, -35.0), (-90.0, 90.0)] {
+        let (got, want) = (value(&served["risk"], x, y), value(&field(), x, y));
+        assert!(
+            (got - want).abs() < 0.005 * range,
+            "served risk at ({x}, {y}): {got}, field {want}"
+        );
+    }
+
+    let scenario = json!({
+        "origin": {"lat": ORIGIN.0, "lon": ORIGIN.1},
+        "region": {"polygon": [[-100, -100], [100, -100], [100, 100], [-100, 100]]},
+        "risk": {"base": 0.5, "objects": []},
+        "truth": {"raster": "wgs84.tif", "spacing": 10},
+        "vessels": [
+            {"id": "a", "x": -50, "y": -50}, {"id": "b", "x": 50, "y": -50},
+            {"id": "c", "x": 50, "y": 50}, {"id": "d", "x": -50, "y": 50}
+        ]
+    });
+    let file = d.join("learn.json");
+    std::fs::write(&file, scenario.to_string()).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_seacover"))
+        .args(["sim", "--duration", "20", "--no-figures", "--scenario"])
+        .arg(&file)
+        .arg("--out")
+        .arg(d.join("sim"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let learning: Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("sim/learning.json")).unwrap())
+            .unwrap();
+    assert!(learning["samples"].as_u64().unwrap() >= 80, "{learning}");
+    // Named but missing: refused in words, naming the file.
+    std::fs::remove_file(d.join("wgs84.tif")).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_seacover"))
+        .args(["sim", "--duration", "1", "--no-figures", "--scenario"])
+        .arg(&file)
+        .arg("--out")
+        .arg(d.join("sim2"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && stderr.contains("wgs84.tif"),
+        "{stderr}"
+    );
+}

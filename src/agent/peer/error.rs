@@ -18,6 +18,11 @@ pub enum PeerError {
     },
     #[error("the mission in {path}")]
     Mission { path: PathBuf, source: MissionError },
+    #[error("the raster the mission in {path} names")]
+    Raster {
+        path: PathBuf,
+        source: crate::raster::RasterError,
+    },
     #[error(
         "a peer fleet's vessel id is at most 7 characters of [A-Za-z0-9_.-] (the beacon's 96 bytes): {0:?}"
     )]

@@ -95,6 +95,11 @@ pub fn mission_file(path: &std::path::Path) -> Result<PeerMissionDocument, PeerE
         path: path.to_path_buf(),
         source,
     })?;
+    let dir = path.parent().unwrap_or(std::path::Path::new("."));
+    let text = crate::raster::resolve(&text, dir).map_err(|source| PeerError::Raster {
+        path: path.to_path_buf(),
+        source,
+    })?;
     let mission =
         crate::mission::Mission::from_text(&text).map_err(|source| PeerError::Mission {
             path: path.to_path_buf(),
