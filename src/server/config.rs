@@ -169,16 +169,7 @@ impl Settings {
             source,
         })?;
         let text = Settings::with_raster(&text, path)?;
-        Settings::parse(&text).map_err(|e| match e {
-            ParseError::Syntax(source) => ConfigError::Syntax {
-                path: path.to_path_buf(),
-                source,
-            },
-            ParseError::Invalid(source) => ConfigError::Invalid {
-                path: path.to_path_buf(),
-                source,
-            },
-        })
+        Settings::parse(&text).map_err(|e| e.at(path))
     }
 
     /// `text` with a `[risk]` that names a raster (`raster = "FILE.tif"`,
@@ -200,17 +191,7 @@ impl Settings {
             .and_then(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)));
         let raster_path = path.parent().unwrap_or(Path::new(".")).join(file);
         table.remove("risk");
-        let invalid = |e| match e {
-            ParseError::Syntax(source) => ConfigError::Syntax {
-                path: path.to_path_buf(),
-                source,
-            },
-            ParseError::Invalid(source) => ConfigError::Invalid {
-                path: path.to_path_buf(),
-                source,
-            },
-        };
-        let placed = Settings::parse(&table.to_string()).map_err(invalid)?;
+        let placed = Settings::parse(&table.to_string()).map_err(|e| e.at(path))?;
         let raster_error = |source| ConfigError::Raster {
             path: path.to_path_buf(),
             source,
@@ -345,6 +326,17 @@ pub enum ParseError {
     Syntax(Box<toml::de::Error>),
     #[error("{0}")]
     Invalid(ApiError),
+}
+
+impl ParseError {
+    /// The error of the file at `path`.
+    fn at(self, path: &Path) -> ConfigError {
+        let path = path.to_path_buf();
+        match self {
+            ParseError::Syntax(source) => ConfigError::Syntax { path, source },
+            ParseError::Invalid(source) => ConfigError::Invalid { path, source },
+        }
+    }
 }
 
 #[cfg(test)]

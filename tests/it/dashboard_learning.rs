@@ -24,6 +24,14 @@ async fn eval(client: &Client, js: &str) -> Value {
     client.execute(js, vec![]).await.unwrap()
 }
 
+/// Chooses what the map shows, as the operator does in the risk panel.
+async fn choose(client: &Client, layer: &str) {
+    let js = format!(
+        "const s = document.getElementById('layer-select'); s.value = '{layer}'; s.dispatchEvent(new Event('change'));"
+    );
+    client.execute(&js, vec![]).await.unwrap();
+}
+
 async fn legend(client: &Client) -> (String, f64) {
     let v = eval(
         client,
@@ -115,13 +123,7 @@ async fn the_dashboard_shows_the_belief_its_uncertainty_and_the_samples() {
     screenshot(&client, "learning-belief").await;
 
     // The uncertainty: small where the survey was, large where it was not.
-    client
-        .execute(
-            "const s = document.getElementById('layer-select'); s.value = 'uncertainty'; s.dispatchEvent(new Event('change'));",
-            vec![],
-        )
-        .await
-        .unwrap();
+    choose(&client, "uncertainty").await;
     until(
         &client,
         "the uncertainty drawn",
@@ -140,13 +142,7 @@ async fn the_dashboard_shows_the_belief_its_uncertainty_and_the_samples() {
     screenshot(&client, "learning-uncertainty").await;
 
     // The mission's own risk, one choice away.
-    client
-        .execute(
-            "const s = document.getElementById('layer-select'); s.value = 'mission'; s.dispatchEvent(new Event('change'));",
-            vec![],
-        )
-        .await
-        .unwrap();
+    choose(&client, "mission").await;
     until(
         &client,
         "the mission's risk drawn",

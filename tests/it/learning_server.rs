@@ -49,6 +49,33 @@ async fn post(http: &reqwest::Client, addr: &str, samples: Value) -> (u16, Value
     (r.status().as_u16(), r.json().await.unwrap())
 }
 
+/// Posts a noise-free survey of the map (σ 0.1) every 5 m along the rows
+/// `rows` (y = 5 m × row), taken at mission time `t`, one source per row
+/// (21 samples each, under its burst); each must be taken. Returns the
+/// samples in the order posted.
+async fn survey(
+    http: &reqwest::Client,
+    addr: &str,
+    rows: std::ops::Range<u32>,
+    t: f64,
+) -> Vec<Value> {
+    let mut posted = Vec::new();
+    for row in rows {
+        let y = 5.0 * f64::from(row);
+        let samples: Vec<Value> = (0..=20)
+            .map(|i| {
+                let x = 5.0 * f64::from(i);
+                json!({"vessel": format!("survey-{row}"), "t": t, "x": x, "y": y,
+                       "value": truth(x, y), "sd": 0.1})
+            })
+            .collect();
+        let (status, answer) = post(http, addr, Value::from(samples.clone())).await;
+        assert_eq!((status, &answer["accepted"]), (200, &json!(21)), "{answer}");
+        posted.extend(samples);
+    }
+    posted
+}
+
 async fn mission_time(http: &reqwest::Client, addr: &str) -> f64 {
     let c: Value = get_json(http, &format!("http://{addr}/api/v1/coverage")).await;
     c["time"].as_f64().unwrap()
@@ -87,19 +114,7 @@ async fn a_coordinator_learns_the_map_from_posted_samples() {
     // A survey every 5 m, one source per row (21 samples each, under its
     // burst), noise-free with σ 0.1.
     let t = mission_time(&http, &addr).await;
-    for row in 0..=20 {
-        let y = 5.0 * f64::from(row);
-        let samples: Vec<Value> = (0..=20)
-            .map(|i| {
-                let x = 5.0 * f64::from(i);
-                json!({"vessel": format!("survey-{row}"), "t": t, "x": x, "y": y,
-                       "value": truth(x, y), "sd": 0.1})
-            })
-            .collect();
-        let (status, answer) = post(&http, &addr, Value::from(samples)).await;
-        assert_eq!(status, 200, "{answer}");
-        assert_eq!(answer["accepted"], 21, "{answer}");
-    }
+    survey(&http, &addr, 0..21, t).await;
     let deadline = tokio::time::Instant::now() + std::time::Duration::from_secs(20);
     let learned = loop {
         let risk: Value = get_json(&http, &risk_url).await;
@@ -292,20 +307,7 @@ async fn the_uncertainty_and_the_samples_are_served_and_recorded() {
 
     // The south half, every 5 m; one source per row.
     let t = mission_time(&http, &addr).await;
-    let mut posted = Vec::new();
-    for row in 0..10 {
-        let y = 5.0 * f64::from(row);
-        let samples: Vec<Value> = (0..=20)
-            .map(|i| {
-                let x = 5.0 * f64::from(i);
-                json!({"vessel": format!("survey-{row}"), "t": t, "x": x, "y": y,
-                       "value": truth(x, y), "sd": 0.1})
-            })
-            .collect();
-        let (status, answer) = post(&http, &addr, Value::from(samples.clone())).await;
-        assert_eq!((status, &answer["accepted"]), (200, &json!(21)), "{answer}");
-        posted.extend(samples);
-    }
+    let posted = survey(&http, &addr, 0..10, t).await;
     let bad = json!([
         {"vessel": "survey-0", "t": t, "x": 500, "y": 5, "value": 1, "sd": 0.1},
         {"vessel": "survey-0", "t": t, "x": 5, "y": 5, "value": 1, "sd": 0}

@@ -32,20 +32,7 @@ fn python() -> Option<PathBuf> {
 
 /// The independent reader's report of `file`.
 fn check(python: &Path, file: &Path) -> Value {
-    let out = Command::new(python)
-        .arg(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/tests/python/check_recording.py"
-        ))
-        .arg(file)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).unwrap()
+    crate::common::process::recording_report(python, file)
 }
 
 struct Server {

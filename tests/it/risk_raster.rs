@@ -30,16 +30,7 @@ fn field() -> Value {
 
 /// A risk document's (or the field's) value at (x, y).
 fn value(doc: &Value, x: f64, y: f64) -> f64 {
-    let objects = doc["objects"].as_array().unwrap();
-    doc["base"].as_f64().unwrap()
-        + objects
-            .iter()
-            .map(|o| {
-                let f = |k: &str| o[k].as_f64().unwrap();
-                let d2 = (x - f("x")).powi(2) + (y - f("y")).powi(2);
-                f("alpha") * (-d2 / (2.0 * f("sigma").powi(2))).exp()
-            })
-            .sum::<f64>()
+    crate::common::server::density_at(doc, x, y)
 }
 
 /// A mission round SITL's home, as `serve --config` reads it: a 200 m

@@ -28,30 +28,9 @@ use super::board::Revision;
 use super::samples::{self, Book, Offered};
 use super::wire::{Keys, Refusal};
 use crate::coverage::RiskField;
+pub use crate::learning::LearnSettings;
 use crate::learning::{Lattice, Learner, Params};
 use crate::protocol::peer::{PeerLearningDocument, PeerSampleDocument};
-
-/// How a peer fleet learns; every member must be given the same
-/// (`agent --peer --learn`), as the belief is fitted with them.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct LearnSettings {
-    /// Optimism: posterior standard deviations added (0: the mean).
-    pub kappa: f64,
-    /// Mission seconds between fits.
-    pub refit: f64,
-    /// The lattice's spacing and each Gaussian's spread [m].
-    pub lattice: f64,
-}
-
-impl Default for LearnSettings {
-    fn default() -> Self {
-        LearnSettings {
-            kappa: 0.0,
-            refit: 5.0,
-            lattice: 10.0,
-        }
-    }
-}
 
 /// A belief fitted by this member.
 #[derive(Debug)]

@@ -24,6 +24,7 @@ use std::sync::mpsc;
 
 use crate::coverage::RiskField;
 use crate::geometry::Point;
+pub use crate::learning::LearnSettings;
 use crate::learning::{Lattice, Learner, Params, Sample};
 use crate::mission::Mission;
 use crate::mission::belief::{risk_document, uncertainty};
@@ -49,27 +50,6 @@ const MAX_AGE: f64 = 600.0;
 /// Samples from later than this ahead of the mission's clock are refused
 /// as from the future [mission s].
 const MAX_AHEAD: f64 = 5.0;
-
-/// `[learning]` of `serve --config`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct LearnSettings {
-    /// Optimism: posterior standard deviations added (0: the mean).
-    pub kappa: f64,
-    /// Mission seconds between fits.
-    pub refit: f64,
-    /// The lattice's spacing and each Gaussian's spread [m].
-    pub lattice: f64,
-}
-
-impl Default for LearnSettings {
-    fn default() -> Self {
-        LearnSettings {
-            kappa: 0.0,
-            refit: 5.0,
-            lattice: 10.0,
-        }
-    }
-}
 
 /// A vessel's token bucket.
 #[derive(Debug, Clone, Copy)]

@@ -64,6 +64,14 @@ pub(crate) fn check_recording(test: &str, file: &std::path::Path) -> Option<serd
         &["mcap", "jsonschema"],
         "Python with Foxglove's mcap package and jsonschema",
     )?;
+    Some(recording_report(&python, file))
+}
+
+/// The independent reader's report of `file`, read with `python`.
+pub(crate) fn recording_report(
+    python: &std::path::Path,
+    file: &std::path::Path,
+) -> serde_json::Value {
     let out = Command::new(python)
         .arg(concat!(
             env!("CARGO_MANIFEST_DIR"),
@@ -77,5 +85,5 @@ pub(crate) fn check_recording(test: &str, file: &std::path::Path) -> Option<serd
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    Some(serde_json::from_slice(&out.stdout).unwrap())
+    serde_json::from_slice(&out.stdout).unwrap()
 }

@@ -48,6 +48,30 @@ use crate::coverage::{InputError, check_range};
 use crate::geometry::Point;
 use crate::geometry::region::MAX_COORDINATE;
 
+/// How a fleet learns, wherever it learns (a coordinator's `[learning]`, a
+/// peer fleet's `--learn`): the optimism it covers with, how often it
+/// fits, and its lattice.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LearnSettings {
+    /// Optimism: posterior standard deviations added (0: the mean).
+    pub kappa: f64,
+    /// Mission seconds between fits.
+    pub refit: f64,
+    /// The lattice's spacing and each Gaussian's spread [m].
+    pub lattice: f64,
+}
+
+impl Default for LearnSettings {
+    /// The mean, a fit every 5 mission seconds, a 10 m lattice.
+    fn default() -> Self {
+        LearnSettings {
+            kappa: 0.0,
+            refit: 5.0,
+            lattice: 10.0,
+        }
+    }
+}
+
 /// One measurement of the field: where, what, and how uncertain.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sample {

@@ -7,7 +7,6 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use seacover::mission::Mission;
-use seacover::protocol::{RiskDocument, RiskObjectDocument};
 use seacover::raster::{Fit, Raster};
 
 #[derive(clap::Subcommand)]
@@ -48,7 +47,8 @@ fn fit(args: FitArgs) -> anyhow::Result<()> {
     let mission = load_mission(&args.mission)?;
     let raster = Raster::read(&args.raster)?;
     let fit = seacover::raster::fit(&raster, &mission, args.spacing)?;
-    let mut text = serde_json::to_string_pretty(&document(&fit))?;
+    let mut text =
+        serde_json::to_string_pretty(&seacover::mission::belief::risk_document(&fit.risk))?;
     text.push('\n');
     match &args.out {
         Some(path) => {
@@ -71,26 +71,6 @@ fn load_mission(path: &Path) -> anyhow::Result<Mission> {
     let text =
         std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
     Mission::from_text(&text).with_context(|| path.display().to_string())
-}
-
-/// The fitted risk as a mission's `risk` (objects without ids: the mission
-/// names them when it takes them).
-fn document(fit: &Fit) -> RiskDocument {
-    RiskDocument {
-        base: fit.risk.base(),
-        objects: fit
-            .risk
-            .objects()
-            .iter()
-            .map(|o| RiskObjectDocument {
-                id: None,
-                x: o.center.x,
-                y: o.center.y,
-                alpha: o.alpha,
-                sigma: o.sigma,
-            })
-            .collect(),
-    }
 }
 
 /// What was fitted and how well, for a person; the last line is the one
