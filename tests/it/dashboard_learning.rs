@@ -24,12 +24,19 @@ async fn eval(client: &Client, js: &str) -> Value {
     client.execute(js, vec![]).await.unwrap()
 }
 
-/// Chooses what the map shows, as the operator does in the risk panel.
-async fn choose(client: &Client, layer: &str) {
+/// Chooses what the map shows, as the operator does in the risk panel,
+/// and waits until the legend names it `label`.
+async fn choose(client: &Client, layer: &str, label: &str) {
     let js = format!(
         "const s = document.getElementById('layer-select'); s.value = '{layer}'; s.dispatchEvent(new Event('change'));"
     );
     client.execute(&js, vec![]).await.unwrap();
+    until(
+        client,
+        &format!("the map showing {layer}"),
+        &format!("document.getElementById('legend-label').textContent === '{label}'"),
+    )
+    .await;
 }
 
 async fn legend(client: &Client) -> (String, f64) {
@@ -57,14 +64,8 @@ async fn the_dashboard_shows_the_belief_its_uncertainty_and_the_samples() {
     })
     .await;
     let http = reqwest::Client::new();
-    let coverage: Value = http
-        .get(server.http("/api/v1/coverage"))
-        .send()
-        .await
-        .unwrap()
-        .json()
-        .await
-        .unwrap();
+    let coverage: Value =
+        crate::common::server::get_json(&http, &server.http("/api/v1/coverage")).await;
     let t = coverage["time"].as_f64().unwrap();
     // A survey of the south-west quarter, every 5 m.
     let samples: Vec<Value> = (0..=10)
@@ -123,13 +124,7 @@ async fn the_dashboard_shows_the_belief_its_uncertainty_and_the_samples() {
     screenshot(&client, "learning-belief").await;
 
     // The uncertainty: small where the survey was, large where it was not.
-    choose(&client, "uncertainty").await;
-    until(
-        &client,
-        "the uncertainty drawn",
-        "document.getElementById('legend-label').textContent === 'σ of Φ'",
-    )
-    .await;
+    choose(&client, "uncertainty", "σ of Φ").await;
     let (surveyed, unseen) = (
         eval(&client, &format!("return {};", at(20.0, 20.0))).await,
         eval(&client, &format!("return {};", at(85.0, 85.0))).await,
@@ -142,13 +137,7 @@ async fn the_dashboard_shows_the_belief_its_uncertainty_and_the_samples() {
     screenshot(&client, "learning-uncertainty").await;
 
     // The mission's own risk, one choice away.
-    choose(&client, "mission").await;
-    until(
-        &client,
-        "the mission's risk drawn",
-        "document.getElementById('legend-label').textContent === 'Φ'",
-    )
-    .await;
+    choose(&client, "mission", "Φ").await;
     let (_, mission_max) = legend(&client).await;
     assert!(
         mission_max < 14.0,

@@ -50,24 +50,38 @@ fn shown(l: &Value) -> (String, String) {
     (share, from)
 }
 
-/// The rows of the page's table (flags, share at 300 s, from when 99.5 %).
-fn rows() -> Vec<(Vec<String>, String, String)> {
+/// The body rows of the page's table whose header starts with `header`,
+/// each as its trimmed cells.
+fn table(header: &str) -> Vec<Vec<String>> {
     let page = std::fs::read_to_string(PAGE).unwrap();
-    let mut lines = page
-        .lines()
-        .skip_while(|l| !l.starts_with("| flags | H on the truth"));
-    assert!(lines.next().is_some(), "docs/learning.md has the table");
+    let mut lines = page.lines().skip_while(|l| !l.starts_with(header));
+    assert!(
+        lines.next().is_some(),
+        "docs/learning.md has the table {header:?}"
+    );
     lines
         .skip(1)
         .take_while(|l| l.starts_with('|'))
         .map(|l| {
-            let cells: Vec<&str> = l.trim_matches('|').split('|').map(str::trim).collect();
+            l.trim_matches('|')
+                .split('|')
+                .map(|c| c.trim().to_string())
+                .collect()
+        })
+        .collect()
+}
+
+/// The rows of the page's table (flags, share at 300 s, from when 99.5 %).
+fn rows() -> Vec<(Vec<String>, String, String)> {
+    table("| flags | H on the truth")
+        .into_iter()
+        .map(|cells| {
             let flags = cells[0]
                 .trim_matches('`')
                 .split_whitespace()
                 .map(String::from)
                 .collect();
-            (flags, cells[1].to_string(), cells[2].to_string())
+            (flags, cells[1].clone(), cells[2].clone())
         })
         .collect()
 }
@@ -106,20 +120,13 @@ fn the_learning_table_is_what_sim_prints_and_learning_reaches_h_star() {
 /// file in examples/), the fleet, and seed 1's share of H★ at 300 s and
 /// from when it stays at or above 99.5 %, as printed.
 fn other_truths() -> Vec<(String, String, (String, String))> {
-    let page = std::fs::read_to_string(PAGE).unwrap();
-    let mut lines = page
-        .lines()
-        .skip_while(|l| !l.starts_with("| truth | fleet | H_true / H★ at 300 s"));
-    assert!(lines.next().is_some(), "docs/learning.md has the table");
-    lines
-        .skip(1)
-        .take_while(|l| l.starts_with('|'))
-        .map(|l| {
-            let cells: Vec<&str> = l.trim_matches('|').split('|').map(str::trim).collect();
+    table("| truth | fleet | H_true / H★ at 300 s")
+        .into_iter()
+        .map(|cells| {
             let first = |cell: &str| cell.split(", ").next().unwrap().to_string();
             let share = first(cells[2].trim_end_matches(" %")) + " %";
             let truth = cells[0].trim_matches('`').to_string();
-            (truth, cells[1].to_string(), (share, first(cells[3])))
+            (truth, cells[1].clone(), (share, first(&cells[3])))
         })
         .collect()
 }
