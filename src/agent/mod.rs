@@ -228,7 +228,8 @@ async fn run_vessel(
     seed: u64,
     shutdown: CancellationToken,
 ) -> Result<(), link::LinkError> {
-    let mut onboard = Onboard::new(&vessel);
+    let period = 1.0 / config.pose_hz;
+    let mut onboard = Onboard::new(&vessel).paced(period);
     let (poses, pose_slot) = watch::channel(None);
     let (commands, mut incoming) = mpsc::channel(4);
     let mut link = tokio::spawn(link::run(
@@ -254,7 +255,6 @@ async fn run_vessel(
         commands,
         shutdown.clone(),
     ));
-    let period = 1.0 / config.pose_hz;
     let mut ticker = tokio::time::interval(Duration::from_secs_f64(period / config.time_warp));
     ticker.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
     // The vessel sails on whether or not its link is up, as a real one would.

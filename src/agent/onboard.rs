@@ -66,6 +66,9 @@ pub(crate) struct Onboard {
     /// and which holds with zero speeds as before (its loop's safety filter
     /// keeps it clear of the others; the keeper's guidance would not).
     keeper: Option<Keeper>,
+    /// How long after its arrival a re-anchored line starts [s]
+    /// ([`Onboard::paced`]).
+    playout: f64,
 }
 
 /// How often the station keeper steers, like a coordinator's tick [s].
@@ -161,6 +164,7 @@ impl Onboard {
             governor: Governor::new(v.params, v.start.vel),
             peaks: Peaks::default(),
             keeper: Some(Keeper::new(&v.params)),
+            playout: 0.0,
         }
     }
 
@@ -168,6 +172,15 @@ impl Onboard {
     /// station with its own guidance (a peer fleet's vessel).
     pub(crate) fn without_keeper(mut self) -> Self {
         self.keeper = None;
+        self
+    }
+
+    /// Advanced `period` at a time by its caller ([`Onboard::advance`]),
+    /// so that its clock reads arrivals up to that late: every command's
+    /// line starts that much after the first's arrival (see
+    /// [`Onboard::receive`]).
+    pub(crate) fn paced(mut self, period: f64) -> Self {
+        self.playout = period;
         self
     }
 
@@ -179,10 +192,16 @@ impl Onboard {
     /// read off it jitters by that much: on the paper's hull turning at
     /// 0.75 rad/s², 50 ms is a 0.04 rad/s step in the command.) Until
     /// then the previous line goes on; a line that starts in the past is
-    /// taken where it has got to. A first command, one after a restarted
-    /// count, or one whose tick is more than [`LEEWAY`] periods off the
-    /// arrival (the link stalled, or the two clocks drifted apart) starts on
-    /// arrival.
+    /// taken where it has got to, a step where the line turned at its tick.
+    /// A first command, one after a restarted count, or one whose tick is
+    /// more than [`LEEWAY`] periods off the arrival (the link stalled, or
+    /// the two clocks drifted apart) anchors the timeline one clock period
+    /// ([`Onboard::paced`]) after its arrival is read: a jitter buffer. The
+    /// clock reads an arrival at the end of the period it falls in, so a
+    /// later command that comes a little later in that phase than the
+    /// first is read a whole period later; on a timeline anchored at the
+    /// first's reading its line would start a period before it is read.
+    /// The hull follows the coordinator's lines a period later instead.
     pub(crate) fn receive(&mut self, command: CommandDocument) {
         self.start_due();
         let newest = self.pending.back().or(self.command.as_ref());
@@ -192,10 +211,10 @@ impl Onboard {
                 if (due - self.t).abs() <= LEEWAY * period {
                     due
                 } else {
-                    self.t
+                    self.t + self.playout
                 }
             }
-            _ => self.t,
+            _ => self.t + self.playout,
         };
         if at > self.t {
             // Never more than a few ahead (the link keeps one command in
@@ -416,6 +435,64 @@ mod tests {
         vessel.advance(0.05);
         vessel.receive(ramp(4));
         assert!((asked(&vessel) - 0.3).abs() < 1e-9);
+    }
+
+    /// The demo's vessels read their clock a pose period (50 ms) at a time
+    /// and simulate that period when they read it, ahead of the wall
+    /// clock: a command that arrives a few ms after its tick's period was
+    /// simulated is read a whole period late. Where the guidance turned its
+    /// line at that tick (a zigzag here; 0.62 to −0.37 rad/s² in the CI run
+    /// that found it), the line followed stepped by the change of slope ×
+    /// 50 ms: a yaw-rate lag of 0.0503 rad/s in the tracking test, over its
+    /// bound. Every command here after the first is read a period later
+    /// than the first one's phase; the line followed has no step.
+    #[test]
+    fn a_command_read_a_clock_period_late_leaves_no_step() {
+        let period = 0.05;
+        let mut vessel = Onboard::new(&VesselConfig {
+            id: "usv-1".into(),
+            index: 1,
+            start: State {
+                x: 50.0,
+                y: 50.0,
+                psi: 0.0,
+                vel: Vec3::zeros(),
+            },
+            params: VesselParams::PAPER,
+        })
+        .paced(period);
+        vessel.tick_period = Some(0.1);
+        let zig = |k: u64| CommandDocument {
+            r_d: if k.is_multiple_of(2) { 0.0 } else { 0.075 },
+            r_d_dot: if k.is_multiple_of(2) { 0.75 } else { -0.75 },
+            ..ramp(k)
+        };
+        vessel.advance(period);
+        vessel.receive(zig(0));
+        let mut before: Option<f64> = None;
+        let mut started = None;
+        for k in 1..20 {
+            let seconds = if k == 1 { 0.15 } else { 0.1 };
+            for _ in 0..(seconds / 1e-3_f64).round() as usize {
+                vessel.advance(1e-3);
+                let Some((c, at)) = vessel.command.as_ref() else {
+                    continue;
+                };
+                started.get_or_insert(*at);
+                let now = c.r_d + c.r_d_dot * (vessel.t - at);
+                if let Some(b) = before {
+                    assert!(
+                        (now - b).abs() <= 0.75e-3 + 1e-9,
+                        "at {:.3} (tick {}): {b} then {now}",
+                        vessel.t,
+                        c.tick
+                    );
+                }
+                before = Some(now);
+            }
+            vessel.receive(zig(k));
+        }
+        assert!(started.is_some(), "the first command started");
     }
 
     /// A vessel under way that loses its commands keeps station: with
