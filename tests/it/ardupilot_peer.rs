@@ -37,17 +37,14 @@
 //! prints one summary with its numbers, and then fails listing every check
 //! that did not hold.
 
-use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use seacover::coverage::{Evaluation, Fleet, Options, Vessel, evaluate};
-use seacover::geometry::Point;
 use seacover::mission::Mission;
 
 use crate::common::process::signal;
 use crate::common::sitl::{
-    Boat, Bridge, SPEEDUP, Seen, Station, ardupilot, boat, east_north, mission_toml,
-    one_sitl_fleet, place, wait_for,
+    Bridge, PeerBridges, SPEEDUP, Seen, Station, ardupilot, east_north, evaluate_at as coverage,
+    mission_file, mission_toml, one_sitl_fleet, peer_bridges, positions, scattered_boats, wait_for,
 };
 
 /// Boats, and bridges.
@@ -75,50 +72,6 @@ const STOP_S: f64 = 6.0;
 const STOPPED: f64 = 0.3;
 /// ArduPilot Rover's GUIDED mode.
 const GUIDED: u32 = 15;
-
-/// The SITL mission as a mission JSON document (what the bridges read),
-/// and the mission the same file makes (what the test evaluates with).
-fn mission_file(dir: &Path) -> (PathBuf, Mission) {
-    let settings = seacover::server::config::Settings::parse(&mission_toml())
-        .expect("the SITL tests' mission");
-    let path = dir.join("mission.json");
-    let json = serde_json::to_vec_pretty(&settings.mission.document()).unwrap();
-    std::fs::write(&path, json).unwrap();
-    let mission = Mission::from_text(&std::fs::read_to_string(&path).unwrap())
-        .expect("the mission file reads back");
-    assert!(
-        mission.origin().is_some(),
-        "the mission has the boats' origin"
-    );
-    (path, mission)
-}
-
-/// A boat's newest position as its autopilot reports it [m east, north].
-fn here(s: &Station) -> Option<(f64, f64)> {
-    s.seen(|s| {
-        s.latest()
-            .map(|p| east_north(f64::from(p.lat) * 1e-7, f64::from(p.lon) * 1e-7))
-    })
-}
-
-fn positions(stations: &[&Station]) -> Option<Vec<(f64, f64)>> {
-    stations.iter().map(|s| here(s)).collect()
-}
-
-/// The centralized evaluation of boats at `at`, each with the mission's
-/// actuator.
-fn coverage(m: &Mission, at: &[(f64, f64)]) -> Evaluation {
-    let vessels = at
-        .iter()
-        .map(|&(x, y)| Vessel {
-            position: Point { x, y },
-            k: m.actuator().k,
-            beta: m.actuator().beta,
-        })
-        .collect();
-    let fleet = Fleet::new(vessels).expect("boats in the region make a fleet");
-    evaluate(m.region(), m.risk(), &fleet, &Options::default())
-}
 
 /// Where a fleet stands: each boat's distance to its centroid (E), H, and
 /// H with every boat at its centroid.
@@ -294,56 +247,15 @@ async fn four_peer_bridges_converge_without_a_coordinator_and_take_over_a_killed
     let _one = one_sitl_fleet().await;
     let began = Instant::now();
     let dir = tempfile::tempdir().unwrap();
-    let (mission_path, mission) = mission_file(dir.path());
-    let zenoh = dir.path().join("zenoh.json5");
-    std::fs::write(&zenoh, "{ scouting: { multicast: { enabled: false } } }\n").unwrap();
-    let fleet = format!("sitlpeer{}", std::process::id());
-
-    // The starts of ardupilot_sitl: 70 m from the origin at 30°, 120°,
-    // 210° and 300°, each heading somewhere else.
-    let boats: Vec<Boat> = (0..N as u8)
-        .map(|i| {
-            let home = place(70.0, 30.0 + 90.0 * f64::from(i));
-            boat(&ap, i + 1, home, 45.0 + 100.0 * f64::from(i))
-        })
-        .collect();
-    let ports: Vec<u16> = {
-        let held: Vec<_> = (0..N)
-            .map(|_| std::net::TcpListener::bind("127.0.0.1:0").unwrap())
-            .collect();
-        held.iter()
-            .map(|l| l.local_addr().unwrap().port())
-            .collect()
-    };
-    let ids: Vec<String> = (1..=N).map(|i| format!("boat-{i}")).collect();
-    let mut bridges: Vec<Bridge> = boats
-        .iter()
-        .enumerate()
-        .map(|(i, b)| {
-            let mut args: Vec<String> = [
-                "--mavlink",
-                &format!("tcpout:127.0.0.1:{}", b.primary),
-                "--id",
-                &ids[i],
-                "--peer",
-                "--arm",
-                "--fleet",
-                &fleet,
-                "--mission",
-                &mission_path.display().to_string(),
-                "--zenoh-config",
-                &zenoh.display().to_string(),
-                "--zenoh-listen",
-                &format!("tcp/127.0.0.1:{}", ports[i]),
-            ]
-            .map(String::from)
-            .to_vec();
-            for p in &ports[..i] {
-                args.extend(["--zenoh-connect".into(), format!("tcp/127.0.0.1:{p}")]);
-            }
-            Bridge::agent(&args)
-        })
-        .collect();
+    let (mission_path, mission) = mission_file(dir.path(), &mission_toml());
+    let boats = scattered_boats(&ap, None);
+    let PeerBridges {
+        mut bridges,
+        ids,
+        ports,
+        zenoh,
+        fleet,
+    } = peer_bridges(dir.path(), &boats, &mission_path, &[]);
     let mut stations = Vec::new();
     for b in &boats {
         stations.push(Station::open(b).await);

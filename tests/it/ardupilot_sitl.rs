@@ -31,8 +31,8 @@ use seacover::protocol::VesselStatusDocument;
 use serde_json::json;
 
 use crate::common::sitl::{
-    Boat, Bridge, Coordinator, ORIGIN, Seen, Station, all_stopped, boat, coverage_now, east_north,
-    mission, place, quiet_over, under_way, wait_for,
+    Bridge, Coordinator, ORIGIN, Seen, Station, all_stopped, boat, coverage_now, east_north,
+    mission, place, quiet_over, scattered_boats, under_way, wait_for,
 };
 pub(crate) use crate::common::sitl::{ardupilot, one_sitl_fleet};
 
@@ -96,14 +96,7 @@ async fn four_boats_converge_follow_conventions_yield_to_the_operator_and_stop_w
     let coordinator = Coordinator::start(&data, &config, "127.0.0.1:0");
     let http = reqwest::Client::new();
 
-    // Scattered starts: 70 m from the origin at 30°, 120°, 210° and 300°,
-    // each heading somewhere else.
-    let boats: Vec<Boat> = (0..4u8)
-        .map(|i| {
-            let home = place(70.0, 30.0 + 90.0 * f64::from(i));
-            boat(&ap, i + 1, home, 45.0 + 100.0 * f64::from(i))
-        })
-        .collect();
+    let boats = scattered_boats(&ap, None);
     let endpoints: Vec<String> = boats
         .iter()
         .map(|b| format!("tcpout:127.0.0.1:{}", b.primary))

@@ -11,6 +11,7 @@ mod common;
 
 mod api_docs;
 mod architecture;
+mod ardupilot_learning;
 mod ardupilot_peer;
 mod ardupilot_quiet;
 mod ardupilot_samples;

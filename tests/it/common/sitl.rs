@@ -442,25 +442,46 @@ pub(crate) async fn under_way(stations: &[Station], speed: f64, what: &str) {
     .expect(what);
 }
 
+/// The SITL mission's risk objects: (id, east, north, α, σ) [m], on a
+/// base of [`BASE`].
+pub(crate) const OBJECTS: [(&str, f64, f64, f64, f64); 2] = [
+    ("wreck", -50.0, 40.0, 10.0, 20.0),
+    ("reef", 45.0, -35.0, 8.0, 25.0),
+];
+pub(crate) const BASE: f64 = 0.1;
+
 /// The mission of the SITL tests, as a `seacover serve --config` TOML: the
-/// origin, a 200 m square round it, two risk objects, and the guidance's
-/// speed below the boats' `WP_SPEED`.
+/// origin, a 200 m square round it, the two risk [`OBJECTS`], and the
+/// guidance's speed below the boats' `WP_SPEED`.
 pub(crate) fn mission_toml() -> String {
+    mission_toml_with(&OBJECTS)
+}
+
+/// [`mission_toml`] with `objects` as its risk's (none: a flat map).
+pub(crate) fn mission_toml_with(objects: &[(&str, f64, f64, f64, f64)]) -> String {
+    let objects: Vec<String> = objects
+        .iter()
+        .map(|(id, x, y, alpha, sigma)| {
+            format!(
+                "    {{ id = \"{id}\", x = {x}, y = {y}, alpha = {alpha}, sigma = {sigma} }},\n"
+            )
+        })
+        .collect();
     format!(
         r#"tick_hz = 10.0
 origin = {{ lat = {}, lon = {} }}
 [region]
 polygon = [[-100, -100], [100, -100], [100, 100], [-100, 100]]
 [risk]
-base = 0.1
+base = {BASE}
 objects = [
-    {{ id = "wreck", x = -50, y = 40, alpha = 10, sigma = 20 }},
-    {{ id = "reef", x = 45, y = -35, alpha = 8, sigma = 25 }},
-]
+{}]
 [guidance]
 max_speed = 2.0
 "#,
-        ORIGIN.0, ORIGIN.1
+        ORIGIN.0,
+        ORIGIN.1,
+        objects.concat()
     )
 }
 
@@ -647,5 +668,141 @@ impl Drop for Coordinator {
     fn drop(&mut self) {
         let _ = self.child.kill();
         let _ = self.child.wait();
+    }
+}
+
+/// The SITL mission `toml` as a mission JSON document (what peer bridges
+/// read, written to `dir/mission.json`), and the mission the same file
+/// makes (what a test evaluates with).
+pub(crate) fn mission_file(dir: &Path, toml: &str) -> (PathBuf, seacover::mission::Mission) {
+    let settings =
+        seacover::server::config::Settings::parse(toml).expect("the SITL tests' mission");
+    let path = dir.join("mission.json");
+    let json = serde_json::to_vec_pretty(&settings.mission.document()).unwrap();
+    std::fs::write(&path, json).unwrap();
+    let mission = seacover::mission::Mission::from_text(&std::fs::read_to_string(&path).unwrap())
+        .expect("the mission file reads back");
+    assert!(
+        mission.origin().is_some(),
+        "the mission has the boats' origin"
+    );
+    (path, mission)
+}
+
+/// A boat's newest position as its autopilot reports it [m east, north].
+pub(crate) fn here(s: &Station) -> Option<(f64, f64)> {
+    s.seen(|s| {
+        s.latest()
+            .map(|p| east_north(f64::from(p.lat) * 1e-7, f64::from(p.lon) * 1e-7))
+    })
+}
+
+/// Every boat's [`here`], once each has reported.
+pub(crate) fn positions(stations: &[&Station]) -> Option<Vec<(f64, f64)>> {
+    stations.iter().map(|s| here(s)).collect()
+}
+
+/// The library's centralized evaluation of boats at `at` on mission `m`'s
+/// region and risk, each boat with the mission's actuator.
+pub(crate) fn evaluate_at(
+    m: &seacover::mission::Mission,
+    at: &[(f64, f64)],
+) -> seacover::coverage::Evaluation {
+    use seacover::coverage::{Fleet, Options, Vessel, evaluate};
+    let vessels = at
+        .iter()
+        .map(|&(x, y)| Vessel {
+            position: seacover::geometry::Point { x, y },
+            k: m.actuator().k,
+            beta: m.actuator().beta,
+        })
+        .collect();
+    let fleet = Fleet::new(vessels).expect("boats in the region make a fleet");
+    evaluate(m.region(), m.risk(), &fleet, &Options::default())
+}
+
+/// Four boats at the SITL tests' scattered starts: 70 m from the origin at
+/// 30°, 120°, 210° and 300°, each heading somewhere else; each running
+/// `script` when one is given ([`boat_with`]).
+pub(crate) fn scattered_boats(ap: &Ardupilot, script: Option<&str>) -> Vec<Boat> {
+    (0..4u8)
+        .map(|i| {
+            let home = place(70.0, 30.0 + 90.0 * f64::from(i));
+            boat_with(ap, i + 1, home, 45.0 + 100.0 * f64::from(i), script)
+        })
+        .collect()
+}
+
+/// Peer bridges, one per boat, and how to reach them.
+pub(crate) struct PeerBridges {
+    pub bridges: Vec<Bridge>,
+    /// `boat-1` …
+    pub ids: Vec<String>,
+    /// Each bridge's Zenoh TCP port on loopback.
+    pub ports: Vec<u16>,
+    /// The Zenoh configuration they share (multicast scouting off).
+    pub zenoh: PathBuf,
+    pub fleet: String,
+}
+
+/// Each of `boats` its own `agent --mavlink … --peer --arm` on the mission
+/// file `mission`, with `extra` arguments: each listens on a loopback TCP
+/// port of its own and dials every bridge started before it, with
+/// multicast scouting off, so the links are exactly those and nothing else
+/// on the machine joins the fleet.
+pub(crate) fn peer_bridges(
+    dir: &Path,
+    boats: &[Boat],
+    mission: &Path,
+    extra: &[&str],
+) -> PeerBridges {
+    let zenoh = dir.join("zenoh.json5");
+    std::fs::write(&zenoh, "{ scouting: { multicast: { enabled: false } } }\n").unwrap();
+    let fleet = format!("sitlpeer{}", std::process::id());
+    let ports: Vec<u16> = {
+        let held: Vec<_> = boats
+            .iter()
+            .map(|_| std::net::TcpListener::bind("127.0.0.1:0").unwrap())
+            .collect();
+        held.iter()
+            .map(|l| l.local_addr().unwrap().port())
+            .collect()
+    };
+    let ids: Vec<String> = (1..=boats.len()).map(|i| format!("boat-{i}")).collect();
+    let bridges = boats
+        .iter()
+        .enumerate()
+        .map(|(i, b)| {
+            let mut args: Vec<String> = [
+                "--mavlink",
+                &format!("tcpout:127.0.0.1:{}", b.primary),
+                "--id",
+                &ids[i],
+                "--peer",
+                "--arm",
+                "--fleet",
+                &fleet,
+                "--mission",
+                &mission.display().to_string(),
+                "--zenoh-config",
+                &zenoh.display().to_string(),
+                "--zenoh-listen",
+                &format!("tcp/127.0.0.1:{}", ports[i]),
+            ]
+            .map(String::from)
+            .to_vec();
+            args.extend(extra.iter().map(|a| a.to_string()));
+            for p in &ports[..i] {
+                args.extend(["--zenoh-connect".into(), format!("tcp/127.0.0.1:{p}")]);
+            }
+            Bridge::agent(&args)
+        })
+        .collect();
+    PeerBridges {
+        bridges,
+        ids,
+        ports,
+        zenoh,
+        fleet,
     }
 }
