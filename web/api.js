@@ -58,9 +58,10 @@ export function askToken(reason) {
  * Sends a write. Returns the parsed answer (or null for 204), or throws after
  * showing the server's error.
  */
-export async function write(method, path, body) {
+export async function write(method, path, body, contentType = "application/json") {
+  const json = contentType === "application/json";
   for (let attempt = 0; attempt < 2; attempt++) {
-    const headers = { "content-type": "application/json" };
+    const headers = { "content-type": contentType };
     const t = token();
     if (t) headers.authorization = `Bearer ${t}`;
     let response;
@@ -68,7 +69,8 @@ export async function write(method, path, body) {
       response = await fetch(path, {
         method,
         headers,
-        body: body === undefined ? undefined : JSON.stringify(body),
+        // A file (a raster) goes as it is.
+        body: body === undefined ? undefined : json ? JSON.stringify(body) : body,
       });
     } catch (e) {
       showError(`${method} ${path}: the coordinator cannot be reached (${e.message})`);

@@ -419,6 +419,30 @@ $("base-form").addEventListener("submit", async (event) => {
   $("base-input").blur();
 });
 
+// A GeoTIFF replaces the mission's risk by its fit (docs/rasters.md); the
+// readout says how well the fit matches the raster.
+$("raster-input").addEventListener("change", async () => {
+  const input = $("raster-input");
+  const file = input.files[0];
+  if (!file) return;
+  const readout = $("raster-readout");
+  readout.textContent = `fitting ${file.name}…`;
+  try {
+    const answer = await write("PUT", "/api/v1/mission/risk/raster", file, "image/tiff");
+    const f = answer.fit;
+    const pct = (x) => (100 * x).toFixed(2);
+    readout.textContent =
+      `${file.name} (${f.crs}, ${f.width} × ${f.height}): ` +
+      `${answer.mission.risk.objects.length} Gaussians of σ ${f.spacing.toPrecision(3)} m; ` +
+      `error RMS ${pct(f.rms)} %, max ${pct(f.worst)} % of the raster's range`;
+    state.snapshot.mission = answer.mission;
+    view.dirty = true;
+  } catch (e) {
+    readout.textContent = `${file.name} not loaded: ${e.message}`;
+  }
+  input.value = "";
+});
+
 $("token-button").addEventListener("click", async () => {
   await askToken(token() ? "Replace the stored token:" : "Token for changes:");
 });

@@ -53,11 +53,24 @@ struct Grid {
 impl Raster {
     /// Reads and checks `path` (see the module's invariants).
     pub fn read(path: &Path) -> Result<Raster, RasterError> {
+        Raster::from_reader(path, BufReader::new(open(path)?))
+    }
+
+    /// Checks a GeoTIFF already in memory (an upload), named `name` in
+    /// its errors, as [`Raster::read`] checks a file.
+    pub fn decode(name: &Path, bytes: &[u8]) -> Result<Raster, RasterError> {
+        Raster::from_reader(name, std::io::Cursor::new(bytes))
+    }
+
+    fn from_reader<R: std::io::Read + std::io::Seek>(
+        path: &Path,
+        reader: R,
+    ) -> Result<Raster, RasterError> {
         let tiff_error = |source| RasterError::Tiff {
             path: path.to_path_buf(),
             source,
         };
-        let mut decoder = Decoder::new(BufReader::new(open(path)?)).map_err(tiff_error)?;
+        let mut decoder = Decoder::new(reader).map_err(tiff_error)?;
         let tags = Tags::read(path, &mut decoder)?;
         let crs = Crs::from_keys(&tags.keys).map_err(|crs| RasterError::Crs {
             path: path.to_path_buf(),

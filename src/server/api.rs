@@ -535,3 +535,75 @@ pub(super) async fn risk(State(app): State<AppState>) -> Json<crate::protocol::B
         uncertainty: None,
     })
 }
+
+/// The largest GeoTIFF `PUT /api/v1/mission/risk/raster` takes [bytes]: a
+/// float band of 2000 × 2000 pixels, far finer than a fit of 30 × 30
+/// Gaussians can use.
+const MAX_RASTER: usize = 32 * 1024 * 1024;
+
+/// Replaces the mission's risk by the fit of a GeoTIFF (docs/rasters.md):
+/// the body is the file itself (single band, EPSG:4326 or a WGS84 UTM
+/// zone, at most 32 MiB), placed by the mission's origin and fitted as
+/// `seacover risk fit` fits it; `?spacing=M` sets the fit's lattice.
+#[utoipa::path(
+    put,
+    path = "/api/v1/mission/risk/raster",
+    tag = "mission",
+    params(("spacing" = Option<f64>, Query, description = "Spacing and spread of the fit's Gaussians [m]; by default 30 across the region's longer side, and at least three pixels.")),
+    request_body(content = Vec<u8>, content_type = "image/tiff", description = "A single-band GeoTIFF."),
+    responses(
+        (status = 200, description = "The mission with the fit as its risk, once durable, and the fit's error against the raster.", body = crate::protocol::RasterFitDocument),
+        (status = 409, response = super::responses::Conflict),
+        super::responses::DocumentWrite,
+    ),
+    security(("bearer" = [])),
+)]
+pub(super) async fn put_raster(
+    State(app): State<AppState>,
+    query: Result<
+        axum::extract::Query<crate::protocol::RasterQuery>,
+        axum::extract::rejection::QueryRejection,
+    >,
+    body: axum::body::Body,
+) -> Result<Response, ApiError> {
+    let axum::extract::Query(query) = query.map_err(|e| ApiError::Malformed(e.body_text()))?;
+    let bytes = axum::body::to_bytes(body, MAX_RASTER)
+        .await
+        .map_err(|_| ApiError::TooLarge(MAX_RASTER))?;
+    let doc = app.snapshot.borrow().document.mission.clone();
+    let mission = crate::mission::Mission::from_document(&doc)?;
+    // Decoding and fitting take up to seconds: off the server's threads.
+    let fitted = tokio::task::spawn_blocking(move || {
+        let raster = crate::raster::Raster::decode(std::path::Path::new("the upload"), &bytes)?;
+        let fit = crate::raster::fit(&raster, &mission, query.spacing)?;
+        let (width, height) = raster.size();
+        let summary = crate::protocol::FitDocument {
+            crs: raster.crs().name(),
+            width,
+            height,
+            spacing: fit.spacing,
+            lattice: fit.gaussians,
+            pixels: fit.pixels,
+            measured: fit.measured,
+            min: fit.min,
+            max: fit.max,
+            rms: fit.rms,
+            worst: fit.worst,
+        };
+        Ok::<_, crate::raster::RasterError>((
+            crate::mission::belief::risk_document(&fit.risk),
+            summary,
+        ))
+    })
+    .await
+    .map_err(|_| ApiError::ShuttingDown)?;
+    let (risk, fit) = fitted?;
+    match change(&app, MissionChange::Risk(risk)).await? {
+        ChangeResult::Mission(mission) => Ok(Json(crate::protocol::RasterFitDocument {
+            mission: *mission,
+            fit,
+        })
+        .into_response()),
+        other => unreachable!("a whole risk answers with the mission, not {other:?}"),
+    }
+}

@@ -113,6 +113,29 @@ impl From<MissionError> for ApiError {
     }
 }
 
+impl From<crate::raster::RasterError> for ApiError {
+    fn from(e: crate::raster::RasterError) -> Self {
+        use crate::raster::RasterError as R;
+        let message = crate::chain::Chain(&e).to_string();
+        match e {
+            // Not a GeoTIFF at all: the body is not what the route takes.
+            R::Tiff { .. } | R::Io { .. } | R::NoData { .. } | R::NotGeoreferenced { .. } => {
+                ApiError::Malformed(message)
+            }
+            R::Bands { .. } | R::Crs { .. } | R::NotNorthUp { .. } => {
+                ApiError::Unsupported(message)
+            }
+            // The file is fine; the mission cannot place it.
+            R::NoOrigin => ApiError::Conflict(message),
+            R::Value { .. }
+            | R::Outside { .. }
+            | R::Projection { .. }
+            | R::Mission { .. }
+            | R::Spacing { .. } => ApiError::Invalid(message),
+        }
+    }
+}
+
 impl From<CoordinatorError> for ApiError {
     fn from(e: CoordinatorError) -> Self {
         let message = e.to_string();

@@ -118,6 +118,7 @@ pub fn router(app: AppState) -> Router {
         .route("/api/v1/mission/origin", put(api::put_origin))
         .route("/api/v1/mission/region", put(api::put_region))
         .route("/api/v1/mission/risk/base", put(api::put_base))
+        .route("/api/v1/mission/risk/raster", put(api::put_raster))
         .route("/api/v1/risk-objects", post(api::post_object))
         .route(
             "/api/v1/risk-objects/{id}",

@@ -45,6 +45,7 @@ reads are public. The vessel link's messages are also in `api/vessel-link.schema
         api::put_origin,
         api::put_region,
         api::put_base,
+        api::put_raster,
         api::risk_objects,
         api::post_object,
         api::get_object,

@@ -190,7 +190,9 @@ impl Store {
         change: &MissionChange,
         result: &ChangeResult,
     ) -> Result<(), StoreError> {
-        if let (MissionChange::Adopt(_), ChangeResult::Mission(mission)) = (change, result) {
+        if let (MissionChange::Adopt(_) | MissionChange::Risk(_), ChangeResult::Mission(mission)) =
+            (change, result)
+        {
             return self.save(mission);
         }
         self.write(|meta, objects| {

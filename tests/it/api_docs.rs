@@ -187,6 +187,7 @@ fn the_documents_cover_every_endpoint_of_the_spec() {
         ("/api/v1/mission/origin", &["put"]),
         ("/api/v1/mission/region", &["put"]),
         ("/api/v1/mission/risk/base", &["put"]),
+        ("/api/v1/mission/risk/raster", &["put"]),
         ("/api/v1/risk-objects", &["get", "post"]),
         ("/api/v1/risk-objects/{id}", &["get", "put", "delete"]),
         ("/api/v1/vessels", &["get"]),

@@ -284,3 +284,225 @@ async fn a_raster_named_in_a_mission_file_is_its_risk() {
         "{stderr}"
     );
 }
+
+/// A PUT of `bytes` to the raster route of the coordinator at `addr`
+/// (with `query`): its status and its JSON answer.
+async fn put_raster(
+    http: &reqwest::Client,
+    addr: &str,
+    query: &str,
+    bytes: Vec<u8>,
+) -> (u16, Value) {
+    let r = http
+        .put(format!("http://{addr}/api/v1/mission/risk/raster{query}"))
+        .header("content-type", "image/tiff")
+        .body(bytes)
+        .send()
+        .await
+        .unwrap();
+    (r.status().as_u16(), r.json().await.unwrap_or(Value::Null))
+}
+
+/// The served mission's risk matches the field at points across the region.
+fn served_is_the_field(risk: &Value, what: &str) {
+    let range = 8.0 + 0.5;
+    for (x, y) in [(0.0, 0.0), (-40.0, 30.0), (45.0, -35.0), (-90.0, 90.0)] {
+        let (got, want) = (value(risk, x, y), value(&field(), x, y));
+        assert!(
+            (got - want).abs() < 0.005 * range,
+            "{what} at ({x}, {y}): {got}, field {want}"
+        );
+    }
+}
+
+/// The coordinator takes a GeoTIFF over REST (`PUT
+/// /api/v1/mission/risk/raster`, what the dashboard's file input sends):
+/// the mission's risk becomes its fit, and the answer says how well the
+/// fit matches the raster (as `risk fit` does). What cannot be a risk map
+/// is refused with the route's codes and changes nothing; a mission
+/// without an origin cannot place a raster (409).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_coordinator_takes_a_raster_over_rest() {
+    let Some(python) = venv_python("risk_raster", &["rasterio"], "rasterio") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write(&python, &d.join("utm.tif"), UTM, 2.0, &[]);
+    write(&python, &d.join("bands.tif"), UTM, 2.0, &["--bands", "3"]);
+    let mut command = crate::common::server::serve_command(&d.join("data"), &mission(d, true));
+    command.arg("--no-record");
+    let (child, addr) = crate::common::server::start(command);
+    let _server = crate::common::process::KillOnDrop(child);
+    let http = reqwest::Client::new();
+    let before = crate::common::server::mission(&http, &addr).await;
+
+    let refusals: [(&str, Vec<u8>, u16, &str, &str); 4] = [
+        (
+            "",
+            b"not a tiff".to_vec(),
+            400,
+            "malformed",
+            "the upload: not a readable GeoTIFF",
+        ),
+        (
+            "",
+            std::fs::read(d.join("bands.tif")).unwrap(),
+            422,
+            "unsupported",
+            "has 3 bands",
+        ),
+        (
+            "?spacing=-1",
+            std::fs::read(d.join("utm.tif")).unwrap(),
+            422,
+            "invalid",
+            "spacing",
+        ),
+        (
+            "?spacing=x",
+            std::fs::read(d.join("utm.tif")).unwrap(),
+            400,
+            "malformed",
+            "spacing",
+        ),
+    ];
+    for (query, bytes, status, code, words) in refusals {
+        let (got, answer) = put_raster(&http, &addr, query, bytes).await;
+        let message = answer["error"]["message"].as_str().unwrap_or_default();
+        assert!(
+            got == status && answer["error"]["code"] == code && message.contains(words),
+            "{query} {words}: {got} {answer}"
+        );
+    }
+    let unchanged = crate::common::server::mission(&http, &addr).await;
+    assert_eq!(unchanged, before, "a refused raster changed the mission");
+
+    let (status, answer) =
+        put_raster(&http, &addr, "", std::fs::read(d.join("utm.tif")).unwrap()).await;
+    assert_eq!(status, 200, "{answer}");
+    let fit = &answer["fit"];
+    println!("the fit over REST: {fit}");
+    assert_eq!(fit["crs"], UTM, "{fit}");
+    // As `risk fit` measures the same raster (check_fit's bounds).
+    let (rms, worst) = (fit["rms"].as_f64().unwrap(), fit["worst"].as_f64().unwrap());
+    assert!(rms < 0.0005 && worst < 0.005, "{fit}");
+    let served: Value =
+        crate::common::server::get_json(&http, &format!("http://{addr}/api/v1/mission")).await;
+    assert_eq!(
+        served, answer["mission"],
+        "the answer is the mission served"
+    );
+    served_is_the_field(&served["risk"], "served risk");
+
+    // Without an origin the raster has no place in the mission's plane.
+    let mut command = crate::common::server::serve_command(&d.join("data2"), &mission(d, false));
+    command.arg("--no-record");
+    let (child, local) = crate::common::server::start(command);
+    let _local = crate::common::process::KillOnDrop(child);
+    let (status, answer) =
+        put_raster(&http, &local, "", std::fs::read(d.join("utm.tif")).unwrap()).await;
+    assert!(
+        status == 409
+            && answer["error"]["message"]
+                .as_str()
+                .unwrap()
+                .contains("no origin"),
+        "{status} {answer}"
+    );
+}
+
+/// The dashboard's risk panel takes a GeoTIFF from the operator's disk,
+/// in a real browser against the real coordinator: the mission's risk
+/// becomes the raster's fit, the panel says how well it fits, and a file
+/// that is not a usable raster is refused in the server's words.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_dashboard_loads_a_raster_as_the_risk() {
+    use crate::common::browser::{browser_or_skip, open_browser, screenshot, start_driver, until};
+    use fantoccini::Locator;
+    let Some(python) = venv_python("risk_raster", &["rasterio"], "rasterio") else {
+        return;
+    };
+    let Some((driver_path, chrome, _heavy)) = browser_or_skip().await else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let tif = d.join("harbour-risk.tif");
+    write(&python, &tif, "EPSG:4326", 2.0, &[]);
+    let bands = d.join("bands.tif");
+    write(&python, &bands, UTM, 2.0, &["--bands", "3"]);
+    let settings = seacover::server::config::Settings::load(&mission(d, true)).unwrap();
+    let server = crate::common::inprocess::Server::start(seacover::server::ServeConfig {
+        mission: settings.mission,
+        ..seacover::server::ServeConfig::default()
+    })
+    .await;
+    let (_driver, port) = start_driver(&driver_path).await;
+    let client = open_browser(port, &chrome).await;
+    client.goto(&server.base()).await.unwrap();
+    until(
+        &client,
+        "the page's modules",
+        "window.seacover && window.seacover.state.snapshot",
+    )
+    .await;
+    let input = client.find(Locator::Id("raster-input")).await.unwrap();
+    input.send_keys(&tif.display().to_string()).await.unwrap();
+    until(
+        &client,
+        "the fit's readout",
+        "document.getElementById('raster-readout').textContent.includes('error RMS')",
+    )
+    .await;
+    let shown = client
+        .execute(
+            "return [document.getElementById('raster-readout').textContent, \
+             window.seacover.state.snapshot.mission.risk.objects.length];",
+            vec![],
+        )
+        .await
+        .unwrap();
+    let readout = shown[0].as_str().unwrap().to_string();
+    println!("the dashboard says: {readout}");
+    assert!(
+        readout.starts_with("harbour-risk.tif (EPSG:4326, "),
+        "{readout}"
+    );
+    let http = reqwest::Client::new();
+    let served: Value =
+        crate::common::server::get_json(&http, &server.http("/api/v1/mission")).await;
+    served_is_the_field(&served["risk"], "the mission after the dashboard's upload");
+    let objects = served["risk"]["objects"].as_array().unwrap().len();
+    assert!(
+        shown[1] == objects && readout.contains(&format!("{objects} Gaussians")),
+        "the page holds {} objects, the server {objects}: {readout}",
+        shown[1]
+    );
+    screenshot(&client, "raster-loaded").await;
+
+    let input = client.find(Locator::Id("raster-input")).await.unwrap();
+    input.send_keys(&bands.display().to_string()).await.unwrap();
+    until(
+        &client,
+        "the refusal",
+        "document.getElementById('raster-readout').textContent.startsWith('bands.tif not loaded')",
+    )
+    .await;
+    let readout = client
+        .execute(
+            "return document.getElementById('raster-readout').textContent;",
+            vec![],
+        )
+        .await
+        .unwrap();
+    assert!(
+        readout.as_str().unwrap().contains("has 3 bands"),
+        "{readout}"
+    );
+    let still: Value =
+        crate::common::server::get_json(&http, &server.http("/api/v1/mission")).await;
+    assert_eq!(still, served, "a refused raster changed the mission");
+    client.close().await.unwrap();
+    server.stop().await;
+}

@@ -27,6 +27,9 @@ pub enum MissionChange {
     /// The whole mission replaced by a peer fleet's (a coordinator joining
     /// a fleet takes the fleet's mission rather than re-task it).
     Adopt(Box<MissionDocument>),
+    /// The whole risk replaced (a raster's fit): its objects without an id
+    /// are numbered as a mission document's are.
+    Risk(RiskDocument),
 }
 
 /// What a change answers with.
@@ -42,8 +45,16 @@ impl Mission {
     /// The mission with `change` applied, validated as `evaluate` validates;
     /// `self` is left untouched when it is rejected.
     pub fn changed(&self, change: &MissionChange) -> Result<(Mission, ChangeResult), MissionError> {
-        if let MissionChange::Adopt(doc) = change {
-            let next = Mission::from_document(doc)?;
+        let whole = match change {
+            MissionChange::Adopt(doc) => Some(doc.as_ref().clone()),
+            MissionChange::Risk(risk) => Some(MissionDocument {
+                risk: risk.clone(),
+                ..self.document()
+            }),
+            _ => None,
+        };
+        if let Some(doc) = whole {
+            let next = Mission::from_document(&doc)?;
             let answer = ChangeResult::Mission(Box::new(next.document()));
             return Ok((next, answer));
         }
@@ -137,7 +148,7 @@ impl Mission {
                 }
                 None
             }
-            MissionChange::Adopt(_) => unreachable!("adopted above"),
+            MissionChange::Adopt(_) | MissionChange::Risk(_) => unreachable!("replaced above"),
         };
         next.risk = risk_field(&next.risk_doc)?;
         let answer = match (change, result) {

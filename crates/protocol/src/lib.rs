@@ -682,6 +682,49 @@ pub struct RiskBaseDocument {
     pub value: f64,
 }
 
+/// `PUT /api/v1/mission/risk/raster`: the mission with a GeoTIFF's fit as
+/// its risk, and how well that fit matches the raster (docs/rasters.md).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
+pub struct RasterFitDocument {
+    pub mission: MissionDocument,
+    pub fit: FitDocument,
+}
+
+/// A raster's fit as a base plus Gaussians, and its error against the
+/// raster at every pixel inside the region.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema, JsonSchema)]
+pub struct FitDocument {
+    /// The raster's coordinate reference system (`EPSG:32755`).
+    pub crs: String,
+    /// Its columns and rows.
+    pub width: usize,
+    pub height: usize,
+    /// The lattice's spacing, each Gaussian's σ [m].
+    pub spacing: f64,
+    /// Gaussians in the lattice; the risk keeps those not negligible.
+    pub lattice: usize,
+    /// Pixels with data in the region's bounding box.
+    pub pixels: usize,
+    /// Pixels inside the region, where the error is measured.
+    pub measured: usize,
+    /// The raster's smallest and largest value over the measured pixels.
+    pub min: f64,
+    pub max: f64,
+    /// RMS of fit − raster over the measured pixels, over max − min.
+    pub rms: f64,
+    /// Largest |fit − raster| there, over max − min.
+    pub worst: f64,
+}
+
+/// `PUT /api/v1/mission/risk/raster` query.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RasterQuery {
+    /// Spacing and spread of the fit's Gaussians [m]; by default 30 across
+    /// the region's longer side, and at least three pixels.
+    pub spacing: Option<f64>,
+}
+
 /// `GET /api/v1/coverage/history`: H(P) from the mission's first tick to
 /// (about) the newest, at most 1000 samples however long the mission.
 /// Every tick is kept at first; when the history is full every other
