@@ -269,6 +269,52 @@ async fn a_raster_named_in_a_mission_file_is_its_risk() {
         serde_json::from_str(&std::fs::read_to_string(d.join("sim/learning.json")).unwrap())
             .unwrap();
     assert!(learning["samples"].as_u64().unwrap() >= 80, "{learning}");
+    // `evaluate` takes the same document: its H is that of the fit
+    // `risk fit` writes, given inline.
+    let evaluate = |doc: &Value, name: &str| -> Value {
+        let file = d.join(name);
+        std::fs::write(&file, doc.to_string()).unwrap();
+        let out = Command::new(env!("CARGO_BIN_EXE_seacover"))
+            .arg("evaluate")
+            .arg(&file)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "evaluate {name}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        serde_json::from_slice(&out.stdout).unwrap()
+    };
+    let mut plain = scenario.clone();
+    plain.as_object_mut().unwrap().remove("truth");
+    let plain_file = d.join("plain.json");
+    std::fs::write(&plain_file, plain.to_string()).unwrap();
+    let fitted = d.join("fitted.json");
+    let run = Command::new(env!("CARGO_BIN_EXE_seacover"))
+        .args(["risk", "fit"])
+        .arg(d.join("wgs84.tif"))
+        .arg("--mission")
+        .arg(&plain_file)
+        .args(["--spacing", "10", "--out"])
+        .arg(&fitted)
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let mut named = plain.clone();
+    named["risk"] = json!({"raster": "wgs84.tif", "spacing": 10});
+    let from_raster = evaluate(&named, "evaluate-named.json");
+    let mut inline = named.clone();
+    inline["risk"] = serde_json::from_str(&std::fs::read_to_string(&fitted).unwrap()).unwrap();
+    let from_document = evaluate(&inline, "evaluate-inline.json");
+    assert_eq!(
+        from_raster["H"], from_document["H"],
+        "evaluate of a raster-named risk against the fit given inline"
+    );
     // Named but missing: refused in words, naming the file.
     std::fs::remove_file(d.join("wgs84.tif")).unwrap();
     let out = Command::new(env!("CARGO_BIN_EXE_seacover"))

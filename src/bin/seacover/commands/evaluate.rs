@@ -51,6 +51,26 @@ pub(crate) fn run(Args { file, tolerance }: Args) -> ExitCode {
         };
         return fail("io", format!("cannot read {what}: {e}"));
     }
+    // A risk named as a raster, as in `sim --scenario` (docs/rasters.md),
+    // relative to the file's directory.
+    let dir = match &file {
+        Some(path) if path.as_os_str() != "-" => path.parent().map(PathBuf::from),
+        _ => None,
+    };
+    let text = match seacover::raster::resolve(&text, &dir.unwrap_or_else(|| ".".into())) {
+        Ok(text) => text,
+        Err(e) => {
+            let code = match e {
+                seacover::raster::RasterError::Io { .. } => "io",
+                seacover::raster::RasterError::Tiff { .. } => "malformed",
+                seacover::raster::RasterError::Bands { .. }
+                | seacover::raster::RasterError::Crs { .. }
+                | seacover::raster::RasterError::NotNorthUp { .. } => "unsupported",
+                _ => "invalid",
+            };
+            return fail(code, seacover::chain::Chain(&e).to_string());
+        }
+    };
     let options = Options {
         tolerance,
         parallel: true,
