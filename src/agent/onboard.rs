@@ -326,6 +326,21 @@ mod tests {
     use super::*;
     use crate::control::model::VesselParams;
 
+    /// The paper's hull at rest at (50, 50), heading east.
+    fn paper_vessel() -> Onboard {
+        Onboard::new(&VesselConfig {
+            id: "usv-1".into(),
+            index: 1,
+            start: State {
+                x: 50.0,
+                y: 50.0,
+                psi: 0.0,
+                vel: Vec3::zeros(),
+            },
+            params: VesselParams::PAPER,
+        })
+    }
+
     /// Tick k's line of a yaw-rate ramp at 0.75 rad/s² (the paper's hull
     /// turning as hard as it declared it can), 10 Hz.
     fn ramp(tick: u64) -> CommandDocument {
@@ -378,17 +393,7 @@ mod tests {
     /// ramp is followed without a step.
     #[test]
     fn a_command_starts_at_its_tick_not_when_it_arrives() {
-        let mut vessel = Onboard::new(&VesselConfig {
-            id: "usv-1".into(),
-            index: 1,
-            start: State {
-                x: 50.0,
-                y: 50.0,
-                psi: 0.0,
-                vel: Vec3::zeros(),
-            },
-            params: VesselParams::PAPER,
-        });
+        let mut vessel = paper_vessel();
         vessel.tick_period = Some(0.1);
         let t0 = vessel.t;
         vessel.receive(ramp(0));
@@ -449,18 +454,7 @@ mod tests {
     #[test]
     fn a_command_read_a_clock_period_late_leaves_no_step() {
         let period = 0.05;
-        let mut vessel = Onboard::new(&VesselConfig {
-            id: "usv-1".into(),
-            index: 1,
-            start: State {
-                x: 50.0,
-                y: 50.0,
-                psi: 0.0,
-                vel: Vec3::zeros(),
-            },
-            params: VesselParams::PAPER,
-        })
-        .paced(period);
+        let mut vessel = paper_vessel().paced(period);
         vessel.tick_period = Some(0.1);
         let zig = |k: u64| CommandDocument {
             r_d: if k.is_multiple_of(2) { 0.0 } else { 0.075 },

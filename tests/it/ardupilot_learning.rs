@@ -191,28 +191,12 @@ async fn four_sitl_boats_learn_the_map_through_a_coordinator() {
     let http = reqwest::Client::new();
     let lua = script();
     let boats = scattered_boats(&ap, Some(&lua));
-    let mut args: Vec<String> = [
-        "--server",
+    let bridge = Bridge::of_boats(
         &coordinator.url(""),
-        "--arm",
-        "--sample-name",
-        "RISK",
-        "--sample-sd",
-        SAMPLE_SD,
-    ]
-    .map(String::from)
-    .to_vec();
-    for b in &boats {
-        args.extend([
-            "--mavlink".into(),
-            format!("tcpout:127.0.0.1:{}", b.primary),
-        ]);
-    }
-    let bridge = Bridge::agent(&args);
-    let mut stations = Vec::new();
-    for b in &boats {
-        stations.push(Station::open(b).await);
-    }
+        &boats,
+        &["--sample-name", "RISK", "--sample-sd", SAMPLE_SD],
+    );
+    let stations = Station::open_all(&boats).await;
     let all: Vec<&Station> = stations.iter().collect();
     let ids: Vec<String> = boats.iter().map(|b| format!("mav-{}", b.sysid)).collect();
     let controlled = wait_for(Duration::from_secs(60), async || {
@@ -261,10 +245,7 @@ async fn four_sitl_boats_learn_the_map_as_peers() {
         &path,
         &["--learn", "--sample-name", "RISK", "--sample-sd", SAMPLE_SD],
     );
-    let mut stations = Vec::new();
-    for b in &boats {
-        stations.push(Station::open(b).await);
-    }
+    let stations = Station::open_all(&boats).await;
     let all: Vec<&Station> = stations.iter().collect();
     // GUIDED (15) and armed, as ArduPilot reports it.
     let controlled = wait_for(Duration::from_secs(90), async || {

@@ -256,10 +256,7 @@ async fn four_peer_bridges_converge_without_a_coordinator_and_take_over_a_killed
         zenoh,
         fleet,
     } = peer_bridges(dir.path(), &boats, &mission_path, &[]);
-    let mut stations = Vec::new();
-    for b in &boats {
-        stations.push(Station::open(b).await);
-    }
+    let stations = Station::open_all(&boats).await;
     let all: Vec<&Station> = stations.iter().collect();
     // The test's own Zenoh member, to ask the bridges what they believe.
     let observer = seacover::agent::peer::session::ZenohOptions {

@@ -13,7 +13,7 @@
 use std::time::Duration;
 
 use crate::common::sitl::{
-    Boat, Bridge, Coordinator, Station, boat, coverage_now, mission, place, quiet_arrival, wait_for,
+    Bridge, Coordinator, Station, coverage_now, mission, quiet_arrival, scattered_boats, wait_for,
 };
 use crate::common::sitl::{ardupilot, one_sitl_fleet};
 
@@ -28,27 +28,9 @@ async fn boats_handed_their_goals_keep_station_on_their_own_loiter() {
     let http = reqwest::Client::new();
     let vessels = async || coordinator.vessels(&http).await;
 
-    // The starts of `ardupilot_sitl`'s four boats.
-    let boats: Vec<Boat> = (0..4u8)
-        .map(|i| {
-            let home = place(70.0, 30.0 + 90.0 * f64::from(i));
-            boat(&ap, i + 1, home, 45.0 + 100.0 * f64::from(i))
-        })
-        .collect();
-    let mut args: Vec<String> = ["--server", &base, "--arm", "--station-radius", "3"]
-        .map(String::from)
-        .to_vec();
-    for b in &boats {
-        args.extend([
-            "--mavlink".into(),
-            format!("tcpout:127.0.0.1:{}", b.primary),
-        ]);
-    }
-    let _bridge = Bridge::agent(&args);
-    let mut stations = Vec::new();
-    for b in &boats {
-        stations.push(Station::open(b).await);
-    }
+    let boats = scattered_boats(&ap, None);
+    let _bridge = Bridge::of_boats(&base, &boats, &["--station-radius", "3"]);
+    let stations = Station::open_all(&boats).await;
     let ids: Vec<String> = boats.iter().map(|b| format!("mav-{}", b.sysid)).collect();
     wait_for(Duration::from_secs(60), async || {
         let vs = vessels().await;

@@ -97,15 +97,8 @@ async fn four_boats_converge_follow_conventions_yield_to_the_operator_and_stop_w
     let http = reqwest::Client::new();
 
     let boats = scattered_boats(&ap, None);
-    let endpoints: Vec<String> = boats
-        .iter()
-        .map(|b| format!("tcpout:127.0.0.1:{}", b.primary))
-        .collect();
-    let bridge = Bridge::start(&format!("http://{}", coordinator.addr), &endpoints);
-    let mut stations = Vec::new();
-    for b in &boats {
-        stations.push(Station::open(b).await);
-    }
+    let bridge = Bridge::of_boats(&format!("http://{}", coordinator.addr), &boats, &[]);
+    let stations = Station::open_all(&boats).await;
     let ids: Vec<String> = boats.iter().map(|b| format!("mav-{}", b.sysid)).collect();
 
     // Under control once the EKF has a position (about 42 s of simulated
@@ -593,6 +586,7 @@ async fn bad_mavlink_input_changes_nothing() {
             format!("tcpout:127.0.0.1:{}", real.primary),
             format!("udpin:127.0.0.1:{port}"),
         ],
+        &[],
     );
     let station = Station::open(&real).await;
     wait_for(Duration::from_secs(60), async || {

@@ -178,13 +178,23 @@ pub(crate) struct Bridge {
 
 impl Bridge {
     /// A bridge of `endpoints` onto the coordinator at `server`, with
-    /// `--arm`.
-    pub(crate) fn start(server: &str, endpoints: &[String]) -> Bridge {
+    /// `--arm` and the `extra` arguments.
+    pub(crate) fn start(server: &str, endpoints: &[String], extra: &[&str]) -> Bridge {
         let mut args: Vec<String> = ["--server", server, "--arm"].map(String::from).to_vec();
+        args.extend(extra.iter().map(|a| a.to_string()));
         for e in endpoints {
             args.extend(["--mavlink".to_string(), e.clone()]);
         }
         Bridge::agent(&args)
+    }
+
+    /// [`Bridge::start`] of every boat of `boats`, each on its primary port.
+    pub(crate) fn of_boats(server: &str, boats: &[Boat], extra: &[&str]) -> Bridge {
+        let endpoints: Vec<String> = boats
+            .iter()
+            .map(|b| format!("tcpout:127.0.0.1:{}", b.primary))
+            .collect();
+        Bridge::start(server, &endpoints, extra)
     }
 
     /// `seacover --log-format json agent ARGS…` at `RUST_LOG=info`.
@@ -288,6 +298,15 @@ pub(crate) struct Station {
 pub(crate) const STATION_SYSID: u8 = 250;
 
 impl Station {
+    /// [`Station::open`] on each of `boats`, in their order.
+    pub(crate) async fn open_all(boats: &[Boat]) -> Vec<Station> {
+        let mut stations = Vec::new();
+        for b in boats {
+            stations.push(Station::open(b).await);
+        }
+        stations
+    }
+
     pub(crate) async fn open(boat: &Boat) -> Station {
         let address = format!("tcpout:127.0.0.1:{}", boat.second);
         let began = Instant::now();
