@@ -34,6 +34,7 @@ pub mod evaluate;
 pub mod fleet;
 pub mod gaussian;
 pub mod goal;
+mod grid;
 pub mod integrate;
 pub mod mixed;
 pub mod partition;
