@@ -145,11 +145,6 @@ impl GridMap {
             (self.centers[k], value)
         })
     }
-
-    /// The grid's spacing [m].
-    pub fn spacing(&self) -> f64 {
-        self.spacing
-    }
 }
 
 #[cfg(test)]

@@ -281,16 +281,6 @@ impl Quadrature {
             }
         }
     }
-
-    /// How many points.
-    pub fn len(&self) -> usize {
-        self.points.len()
-    }
-
-    /// Whether the region holds none of them.
-    pub fn is_empty(&self) -> bool {
-        self.points.is_empty()
-    }
 }
 
 #[cfg(test)]
@@ -389,7 +379,7 @@ mod tests {
         let region = square(100.0);
         let lattice = Lattice::over(p(0.0, 0.0), p(100.0, 100.0), 10.0).unwrap();
         let quadrature = Quadrature::over(&region, &lattice);
-        assert_eq!(quadrature.len(), 1600);
+        assert_eq!(quadrature.points.len(), 1600);
         let vessel = |x, y, k| Vessel {
             position: p(x, y),
             k,
