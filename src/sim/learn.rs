@@ -10,9 +10,9 @@
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use crate::coverage::{InputError, RiskField};
+use crate::coverage::{Fleet, InputError, RiskField, grid_lloyd};
 use crate::geometry::{Point, Region};
-use crate::learning::{Lattice, Learner, Params, Sample};
+use crate::learning::{Adaptive, Gains, GridMap, Lattice, Learner, Params, Quadrature, Sample};
 
 /// How the simulated fleet measures and learns the field.
 #[derive(Debug, Clone)]
@@ -69,6 +69,33 @@ pub enum Cover {
     Prior,
     /// The truth (the clairvoyant fleet that defines H★).
     Truth,
+    /// Schwager's adaptive law over the same lattice (gains `SCHWAGER`),
+    /// for comparison.
+    Schwager,
+    /// Lloyd's algorithm on a map gridded from the samples (`GRID`), for
+    /// comparison.
+    GridLloyd,
+}
+
+/// Schwager's gains in `seacover sim` (docs/learning.md, "Against
+/// Schwager's law and a grid Lloyd": the best of those tried on the
+/// paper's map): Γ, γ and a_min.
+pub(super) const SCHWAGER: (f64, f64, f64) = (0.001, 70.0, 0.01);
+
+/// The grid Lloyd's map: spacing and each sample's reach [m] (the same
+/// page: the reach is the best of those tried).
+pub(super) const GRID: (f64, f64) = (1.0, 15.0);
+
+/// What turns samples into the density a fleet covers.
+enum Estimator {
+    /// The Bayesian learner, fitted every `refit` seconds.
+    Bayes(Learner),
+    /// Schwager's law, stepped every tick; the time of its last step.
+    Schwager(Box<(Adaptive, Quadrature)>, f64),
+    /// The grid map, whose centroids replace the covered density's.
+    Grid(GridMap),
+    /// Nothing: the fleet covers the prior or the truth.
+    None,
 }
 
 impl LearningConfig {
@@ -123,7 +150,7 @@ impl LearningConfig {
 /// The learning side of one run.
 pub(super) struct Learning {
     config: LearningConfig,
-    learner: Learner,
+    estimator: Estimator,
     rng: ChaCha8Rng,
     /// σ of every sample (the noise is known to the simulated sensor).
     sd: f64,
@@ -157,10 +184,24 @@ impl Learning {
         };
         let cover = match config.cover {
             Cover::Truth => config.truth.clone(),
-            Cover::Learned | Cover::Prior => prior.clone(),
+            _ => prior.clone(),
+        };
+        let estimator = match config.cover {
+            Cover::Learned => {
+                Estimator::Bayes(Learner::new(lattice, prior.clone(), Params::default()))
+            }
+            Cover::Schwager => {
+                let (adaptation, data, a_min) = SCHWAGER;
+                let gains = Gains::new(adaptation, data, a_min)?;
+                let quadrature = Quadrature::over(region, &lattice);
+                let law = Adaptive::new(lattice, prior.base(), gains);
+                Estimator::Schwager(Box::new((law, quadrature)), 0.0)
+            }
+            Cover::GridLloyd => Estimator::Grid(GridMap::over(region, prior, GRID.0, GRID.1)?),
+            Cover::Prior | Cover::Truth => Estimator::None,
         };
         Ok(Learning {
-            learner: Learner::new(lattice, prior.clone(), Params::default()),
+            estimator,
             rng: ChaCha8Rng::seed_from_u64(seed ^ 0x5eac_0fe4),
             sd: config.noise.max(1e-6) * scale,
             range: scale,
@@ -184,19 +225,19 @@ impl Learning {
         self.config.cover == Cover::Truth
     }
 
-    /// At tick time `t` with the hulls at `at`: samples when due, a fit
-    /// when due; returns whether what the fleet covers changed.
-    pub(super) fn tick(&mut self, t: f64, at: &[Point]) -> bool {
+    /// At tick time `t` with the hulls at `at` moving at `velocities`
+    /// (over ground) as `fleet`: samples when due, then a fit when due
+    /// (the learner) or a step of the law (Schwager's).
+    pub(super) fn tick(&mut self, t: f64, at: &[Point], velocities: &[Point], fleet: &Fleet) {
         // Only a learning fleet samples: the others would ignore it.
-        if self.config.cover != Cover::Learned {
-            return false;
+        if matches!(self.estimator, Estimator::None) {
+            return;
         }
         while self.next_sample <= t + 1e-9 {
             for (vessel, &q) in at.iter().enumerate() {
                 let value = self.measure(q);
                 if let Ok(s) = Sample::new(q, value, self.sd) {
-                    self.learner.add(s);
-                    self.samples += 1;
+                    self.take(s);
                     if let Some(log) = &mut self.log {
                         log.samples.push(LoggedSample {
                             t,
@@ -210,13 +251,44 @@ impl Learning {
             }
             self.next_sample += 1.0 / self.config.rate;
         }
+        match &mut self.estimator {
+            Estimator::Bayes(_) => self.refit(t),
+            Estimator::Schwager(law, last) => {
+                let (law, quadrature) = &mut **law;
+                let mut coupling = Vec::new();
+                quadrature.coupling(fleet, velocities, &mut coupling);
+                law.step(&coupling, t - *last);
+                *last = t;
+                self.cover = law.density();
+            }
+            Estimator::Grid(_) | Estimator::None => {}
+        }
+    }
+
+    /// One sample into whatever learns from samples.
+    fn take(&mut self, s: Sample) {
+        self.samples += 1;
+        match &mut self.estimator {
+            Estimator::Bayes(learner) => learner.add(s),
+            // Each sample stands for the seconds until the next one.
+            Estimator::Schwager(law, _) => law.0.observe(&s, 1.0 / self.config.rate),
+            Estimator::Grid(map) => map.add(&s),
+            Estimator::None => {}
+        }
+    }
+
+    /// The learner's fit, when one is due.
+    fn refit(&mut self, t: f64) {
+        let Estimator::Bayes(learner) = &self.estimator else {
+            return;
+        };
         if self.next_fit > t + 1e-9 {
-            return false;
+            return;
         }
         while self.next_fit <= t + 1e-9 {
             self.next_fit += self.config.refit;
         }
-        let belief = self.learner.fit();
+        let belief = learner.fit();
         self.cover = belief.density(self.config.kappa);
         self.fits += 1;
         if let Some(log) = &mut self.log {
@@ -224,7 +296,15 @@ impl Learning {
             let grid = crate::mission::belief::uncertainty(&belief, min, max);
             log.beliefs.push((t, self.cover.clone(), grid));
         }
-        true
+    }
+
+    /// The grid Lloyd's centroids for `fleet`, which replace those of the
+    /// density covered (the prior); none for the other fleets.
+    pub(super) fn centroids(&self, fleet: &Fleet) -> Option<Vec<Point>> {
+        match &self.estimator {
+            Estimator::Grid(map) => Some(grid_lloyd::centroids(fleet, map.cells())),
+            _ => None,
+        }
     }
 
     /// One noisy reading of the truth at `q`.

@@ -259,6 +259,8 @@ impl LearningSummary {
                 super::Cover::Learned => "learned",
                 super::Cover::Prior => "prior",
                 super::Cover::Truth => "truth",
+                super::Cover::Schwager => "schwager",
+                super::Cover::GridLloyd => "grid-lloyd",
             },
             kappa: l.kappa,
             noise: l.noise,

@@ -276,8 +276,21 @@ impl Hulls {
             fleet_at(config, at.iter().copied()).ok_or(SimError::Diverged { vessel: 0, t })?;
         let (eval, h_true) = match learning {
             Some(l) => {
-                l.tick(t, &at);
-                let eval = evaluate(region, &l.cover, &fleet, &options);
+                let velocities: Vec<Point> = self
+                    .states
+                    .iter()
+                    .map(|s| {
+                        let (x, y) = s.ground_velocity();
+                        Point { x, y }
+                    })
+                    .collect();
+                l.tick(t, &at, &velocities, &fleet);
+                let mut eval = evaluate(region, &l.cover, &fleet, &options);
+                if let Some(centroids) = l.centroids(&fleet) {
+                    for (cell, c) in eval.cells.iter_mut().zip(centroids) {
+                        cell.centroid = c;
+                    }
+                }
                 let h_true = if l.covers_truth() {
                     eval.h
                 } else {

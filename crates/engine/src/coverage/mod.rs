@@ -21,7 +21,8 @@
 //! [`evaluate`](mod@evaluate) ties them together; [`range`] is one vessel's
 //! range-limited cell in a peer fleet, [`split`] the plan of a peer fleet
 //! split in two groups; [`goal`] turns a centroid
-//! into a goal a vessel can reach among islands.
+//! into a goal a vessel can reach among islands; [`grid_lloyd`] is
+//! Lloyd's centroid on a gridded density (a baseline for learning).
 
 pub mod boundary;
 pub mod cells;
@@ -35,6 +36,7 @@ pub mod fleet;
 pub mod gaussian;
 pub mod goal;
 mod grid;
+pub mod grid_lloyd;
 pub mod integrate;
 pub mod mixed;
 pub mod partition;

@@ -31,17 +31,26 @@
 //! two learners that heard the same samples hold the same belief, bit for
 //! bit; samples are validated by [`Sample::new`], and a fit cannot fail.
 //!
+//! Beside the learner, the baselines docs/learning.md measures it
+//! against: [`Adaptive`], Schwager's adaptive law over the same lattice,
+//! and [`GridMap`], a map gridded straight from the samples (for
+//! [`crate::coverage::grid_lloyd`]).
+//!
 //! Cost: each sample touches the Gaussians within 5 h of it (about 80);
 //! a fit is O(N · 80² + K³) for N samples and K Gaussians (K = 441 on the
 //! paper's 100 m square at h = 5 m).
 
 mod fit;
+mod grid_map;
 mod lattice;
+mod schwager;
 #[cfg(test)]
 mod tests;
 
 pub use fit::{Belief, Learner, Params};
+pub use grid_map::GridMap;
 pub use lattice::Lattice;
+pub use schwager::{Adaptive, Gains, Quadrature};
 
 use crate::coverage::density::MAX_DENSITY;
 use crate::coverage::{InputError, check_range};

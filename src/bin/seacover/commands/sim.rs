@@ -75,8 +75,10 @@ pub(crate) struct Args {
 #[command(next_help_heading = "Learning (a scenario with a truth)")]
 struct Learning {
     /// What the fleet covers: the belief learned from samples (`learned`),
-    /// the scenario's risk alone (`prior`: no learning) or the truth
-    /// itself (`truth`: the clairvoyant).
+    /// the scenario's risk alone (`prior`: no learning), the truth
+    /// itself (`truth`: the clairvoyant), or for comparison Schwager's
+    /// adaptive law (`schwager`) or Lloyd on a map gridded from the
+    /// samples (`grid-lloyd`).
     #[arg(long, value_enum, default_value = "learned")]
     cover: Cover,
     /// Optimism: posterior standard deviations added to the belief (0:
@@ -107,6 +109,8 @@ impl Learning {
             Cover::Learned => seacover::sim::Cover::Learned,
             Cover::Prior => seacover::sim::Cover::Prior,
             Cover::Truth => seacover::sim::Cover::Truth,
+            Cover::Schwager => seacover::sim::Cover::Schwager,
+            Cover::GridLloyd => seacover::sim::Cover::GridLloyd,
         };
         (l.kappa, l.noise, l.outliers) = (self.kappa, self.noise, self.outliers);
         (l.rate, l.refit, l.spacing) = (self.sample_rate, self.refit, self.lattice);
@@ -134,14 +138,17 @@ enum Cover {
     Learned,
     Prior,
     Truth,
+    Schwager,
+    GridLloyd,
 }
 
 #[derive(clap::Subcommand)]
 enum Study {
-    /// A scenario with a truth covered four ways per seed (the
-    /// clairvoyant, no learning, the mean belief, an optimistic one), each
-    /// judged on the truth as a share of H★: table.md, study.json and the
-    /// figure learning.png / .svg of the first seed (docs/learning.md).
+    /// A scenario with a truth covered six ways per seed (the
+    /// clairvoyant, no learning, the mean belief, an optimistic one,
+    /// Schwager's adaptive law, Lloyd on a map gridded from the samples),
+    /// each judged on the truth as a share of H★: table.md, study.json and
+    /// the figure learning.png / .svg of the first seed (docs/learning.md).
     LearningStudy {
         /// A scenario file with a `truth`.
         #[arg(
@@ -276,6 +283,10 @@ fn simulate(args: &Args) -> anyhow::Result<()> {
     if let Some(l) = &mut config.learning {
         args.learning.apply(l)?;
     }
+    ensure!(
+        args.record.is_none() || !matches!(args.learning.cover, Cover::Schwager | Cover::GridLloyd),
+        "--record records the learner's beliefs: not with --cover schwager or grid-lloyd"
+    );
     let config = match args.starts {
         Starts::Scenario => config,
         Starts::Random => {
