@@ -49,7 +49,7 @@ use crate::geometry::{Point, dot, norm2};
 
 /// Gauss–Legendre points per piece.
 const NODES: usize = 12;
-pub(super) static GL: LazyLock<([f64; NODES], [f64; NODES])> = LazyLock::new(|| {
+static GL: LazyLock<([f64; NODES], [f64; NODES])> = LazyLock::new(|| {
     let (x, w) = gauss_legendre_01(NODES);
     (
         x.try_into().expect("NODES nodes"),
@@ -63,7 +63,7 @@ const CUTOFF: f64 = 50.0;
 /// Longest piece in widths 1/√a of the Gaussian: at 2 the 12-point rule's
 /// error is ~1e-16 relative for e^{−a s²} on [0, 2/√a] (≤ 5e-16 on a piece
 /// centred on s = 0), less for the mass integrands.
-pub(super) const WIDTHS: f64 = 2.0;
+const WIDTHS: f64 = 2.0;
 
 /// Longest piece in local decay lengths 1/(a u) where the piece starts at
 /// u > 0: there e^{−a s²} ≈ e^{−a u²} e^{−2 a u (s − u)}, and pieces of
@@ -76,25 +76,6 @@ pub(super) const DECAY: f64 = 3.0;
 /// split form and must be set exactly when g's centre is outside the polygon
 /// with a·dist² ≥ 1 (see [`crate::geometry::ring_distances`]).
 pub fn polygon_integrals<R: AsRef<[Point]>>(rings: &[R], g: &Gaussian, far: bool) -> [f64; 3] {
-    polygon_integrals_above(rings, g, far, f64::NEG_INFINITY)
-}
-
-/// [`polygon_integrals`] without the parts of edges where g is below
-/// e^`floor`: from the first point of an edge's half (either side of the
-/// foot of the perpendicular) where g < e^`floor`, the rest of that half is
-/// left out (far form) or taken as if g were 0 there (near form: the
-/// closed-form tail). For s ≥ u, e^{−a(h² + s²)} ≤ e^{−a(h² + u²)} < e^`floor`,
-/// so each half so cut changes the mass, (|h|/2a) ∫ e^{…}/(h² + s²) ds, by
-/// less than e^`floor` π / (4a) (∫_0^∞ |h| / (h² + s²) ds = π/2), and
-/// ∫ (x − m) g, (1/2a) |∫ e^{…} n ds|, by less than e^`floor` √π / (4a^{3/2})
-/// (∫_u^∞ e^{−a s²} ds ≤ e^{−a u²} √π / (2√a)).
-/// [`integrate`](super::integrate) sets `floor` from its error budget.
-pub fn polygon_integrals_above<R: AsRef<[Point]>>(
-    rings: &[R],
-    g: &Gaussian,
-    far: bool,
-    floor: f64,
-) -> [f64; 3] {
     let m = g.center;
     // e^λ once for the polygon (the near form's factor; the far form keeps
     // λ inside its exponentials).
@@ -106,7 +87,7 @@ pub fn polygon_integrals_above<R: AsRef<[Point]>>(
         let n = ring.len();
         for i in 0..n {
             let (mass_part, line) =
-                segment_scaled(ring[i] - m, ring[(i + 1) % n] - m, g, far, scale, floor);
+                segment_scaled(ring[i] - m, ring[(i + 1) % n] - m, g, far, scale);
             mass += mass_part;
             moment = moment + line;
         }
@@ -122,20 +103,12 @@ pub fn polygon_integrals_above<R: AsRef<[Point]>>(
 /// curved cell ([`curved`](super::curved)).
 pub(super) fn segment(a: Point, b: Point, g: &Gaussian, far: bool) -> (f64, Point) {
     let scale = if far { 0.0 } else { g.log_weight.exp() };
-    segment_scaled(a, b, g, far, scale, f64::NEG_INFINITY)
+    segment_scaled(a, b, g, far, scale)
 }
 
-/// [`segment`] with the near form's e^λ given, cut below e^`floor` as
-/// [`polygon_integrals_above`] says.
+/// [`segment`] with the near form's e^λ given.
 #[inline]
-fn segment_scaled(
-    a: Point,
-    b: Point,
-    g: &Gaussian,
-    far: bool,
-    scale: f64,
-    floor: f64,
-) -> (f64, Point) {
+fn segment_scaled(a: Point, b: Point, g: &Gaussian, far: bool, scale: f64) -> (f64, Point) {
     let len = norm2(b - a).sqrt();
     if len == 0.0 {
         return (0.0, Point { x: 0.0, y: 0.0 });
@@ -144,26 +117,15 @@ fn segment_scaled(
     let normal = Point { x: e.y, y: -e.x };
     let h = dot(a, normal);
     let s0 = dot(a, e);
-    let (mass, line) = edge(g.a, g.log_weight, scale, h, s0, s0 + len, far, floor);
+    let (mass, line) = edge(g.a, g.log_weight, scale, h, s0, s0 + len, far);
     (mass, normal * line)
 }
 
 /// One edge on the line at signed distance `h`, for s in [s0, s1]: returns
 /// (its mass contribution, ∫ e^{λ − a r²} ds up to a constant times the
 /// edge length, which cancels around every closed ring). `scale` = e^λ,
-/// used by the near form only; where g falls below e^`floor` the rest of
-/// each half is cut ([`polygon_integrals_above`]).
-#[allow(clippy::too_many_arguments)]
-fn edge(
-    a: f64,
-    lambda: f64,
-    scale: f64,
-    h: f64,
-    s0: f64,
-    s1: f64,
-    far: bool,
-    floor: f64,
-) -> (f64, f64) {
+/// used by the near form only.
+fn edge(a: f64, lambda: f64, scale: f64, h: f64, s0: f64, s1: f64, far: bool) -> (f64, f64) {
     let h2 = h * h;
     let sqrt_a = a.sqrt();
     // An edge across the foot of the perpendicular (s0 < 0 < s1), short
@@ -194,13 +156,11 @@ fn edge(
     for &(u0, u1) in &parts[..count] {
         let mut u = u0;
         while u < u1 {
-            // Below the caller's floor the rest is within its budget.
-            let below = lambda - a * (h2 + u * u) < floor;
             if far {
-                if below || a * (u * u - u0 * u0) > CUTOFF {
+                if a * (u * u - u0 * u0) > CUTOFF {
                     break; // negligible next to this edge's own start
                 }
-            } else if below || a * (h2 + u * u) > CUTOFF {
+            } else if a * (h2 + u * u) > CUTOFF {
                 // e^{−a r²} is gone: (1 − E)/r² = 1/r², and E − 1 = −1.
                 // atan(u₁/h) − atan(u/h) = atan(h (u₁ − u) / (h² + u u₁)) for
                 // 0 ≤ u ≤ u₁, without the cancellation of two angles near
@@ -521,7 +481,7 @@ pub(super) mod tests {
             }
             let lambda: f64 = rng.random_range(-3.0..1.0);
             let scale = if far { 0.0 } else { lambda.exp() };
-            let new = edge(a, lambda, scale, h, s0, s1, far, f64::NEG_INFINITY);
+            let new = edge(a, lambda, scale, h, s0, s1, far);
             let old = previous_edge(a, lambda, h, s0, s1, far, true);
             for (n, o) in [(new.0, old.0), (new.1, old.1)] {
                 let e = if o == 0.0 {

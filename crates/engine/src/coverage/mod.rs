@@ -35,7 +35,6 @@ pub mod evaluate;
 pub mod fleet;
 pub mod gaussian;
 pub mod goal;
-mod grid;
 pub mod grid_lloyd;
 pub mod integrate;
 pub mod mixed;
