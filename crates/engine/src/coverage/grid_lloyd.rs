@@ -23,17 +23,9 @@ pub fn centroids(fleet: &Fleet, points: impl IntoIterator<Item = (Point, f64)>) 
     let vessels = fleet.vessels();
     let mut sums = vec![(0.0, 0.0, 0.0); vessels.len()];
     for (q, phi) in points {
-        let mut best = (0, f64::NEG_INFINITY);
-        for (i, v) in vessels.iter().enumerate() {
-            let d = q - v.position;
-            let log_f = v.k.ln() - v.beta * dot(d, d);
-            if log_f > best.1 {
-                best = (i, log_f);
-            }
-        }
         // Weights relative to the vessel's own k: the same centroid, and
         // no underflow far from it.
-        let (i, log_f) = best;
+        let (i, log_f) = owner(fleet, q);
         let w = (log_f - vessels[i].k.ln()).exp() * phi.max(0.0);
         let s = &mut sums[i];
         (s.0, s.1, s.2) = (s.0 + w, s.1 + w * q.x, s.2 + w * q.y);
@@ -49,6 +41,21 @@ pub fn centroids(fleet: &Fleet, points: impl IntoIterator<Item = (Point, f64)>) 
             }
         })
         .collect()
+}
+
+/// The vessel whose generalized Voronoi cell holds `q` (the one whose
+/// f_i = k_i exp(−β_i ‖q − p_i‖²) is the largest; a tie goes to the first)
+/// and ln f_i(q). A fleet is never empty, so there always is one.
+pub fn owner(fleet: &Fleet, q: Point) -> (usize, f64) {
+    let mut best = (0, f64::NEG_INFINITY);
+    for (i, v) in fleet.vessels().iter().enumerate() {
+        let d = q - v.position;
+        let log_f = v.k.ln() - v.beta * dot(d, d);
+        if log_f > best.1 {
+            best = (i, log_f);
+        }
+    }
+    best
 }
 
 #[cfg(test)]
@@ -122,5 +129,29 @@ mod tests {
         assert_eq!(got, vec![p(10.0, 10.0), p(90.0, 90.0)]);
         let got = centroids(&fleet, std::iter::empty());
         assert_eq!(got, vec![p(10.0, 10.0), p(90.0, 90.0)]);
+    }
+
+    /// The owner is the vessel of the largest f_i: the nearest one when k
+    /// and β agree, a larger k reaching past the bisector, a tie to the
+    /// first; ln f_i is returned with it.
+    #[test]
+    fn the_owner_has_the_largest_performance() {
+        let vessel = |x, k| Vessel {
+            position: p(x, 0.0),
+            k,
+            beta: 0.01,
+        };
+        let even = Fleet::new(vec![vessel(0.0, 0.5), vessel(10.0, 0.5)]).unwrap();
+        assert_eq!(owner(&even, p(4.0, 3.0)).0, 0);
+        assert_eq!(owner(&even, p(6.0, 3.0)).0, 1);
+        assert_eq!(owner(&even, p(5.0, 3.0)).0, 0);
+        let (i, log_f) = owner(&even, p(6.0, 3.0));
+        assert_eq!(i, 1);
+        assert!((log_f - (0.5f64.ln() - 0.01 * 25.0)).abs() < 1e-15);
+        // k 0.9 against 0.5: ln(0.9/0.5) = 0.588 moves the edge past the
+        // bisector by 0.588 / (0.01 · 2 · 10) = 2.94 m.
+        let uneven = Fleet::new(vec![vessel(0.0, 0.9), vessel(10.0, 0.5)]).unwrap();
+        assert_eq!(owner(&uneven, p(7.9, 0.0)).0, 0);
+        assert_eq!(owner(&uneven, p(8.0, 0.0)).0, 1);
     }
 }

@@ -40,6 +40,7 @@ use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
 use super::{Lattice, Sample};
 use crate::coverage::density::MAX_DENSITY;
+use crate::coverage::grid_lloyd::owner;
 use crate::coverage::{Fleet, InputError, RiskField, RiskObject, check_range};
 use crate::geometry::{Point, Region, dot};
 
@@ -258,15 +259,7 @@ impl Quadrature {
         out.resize(self.len, 0.0);
         let vessels = fleet.vessels();
         for (n, &q) in self.points.iter().enumerate() {
-            let mut best = (0, f64::NEG_INFINITY);
-            for (i, v) in vessels.iter().enumerate() {
-                let d = q - v.position;
-                let log_f = v.k.ln() - v.beta * dot(d, d);
-                if log_f > best.1 {
-                    best = (i, log_f);
-                }
-            }
-            let (i, log_f) = best;
+            let (i, log_f) = owner(fleet, q);
             let Some(&velocity) = velocities.get(i) else {
                 continue;
             };
