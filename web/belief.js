@@ -34,7 +34,8 @@ export async function startLearning(view) {
     view.samples = samples;
     view.dirty = true;
     const at = belief.fitted_at === undefined ? "no fit yet" : `fitted at ${belief.fitted_at.toFixed(1)} s`;
-    const optimism = belief.kappa > 0 ? ` · κ = ${belief.kappa}` : "";
+    // The optimism fades with the samples' age (docs/learning.md): two digits say how far.
+    const optimism = belief.kappa > 0 ? ` · κ = ${belief.kappa.toFixed(2)}` : "";
     $("learning-readout").textContent =
       `${belief.samples} samples held · ${belief.fits} fits · ${at} · ${belief.risk.objects.length} Gaussians${optimism}`;
   };

@@ -37,6 +37,7 @@
 //!
 //! [learning]           # learn the risk map from samples (docs/learning.md)
 //! kappa = 0.0          # optimism: posterior standard deviations added
+//! fade = 30.0          # the optimism's time constant [mission s]
 //! refit = 5.0          # mission seconds between fits
 //! lattice = 10.0       # spacing and spread of the belief's Gaussians [m]
 //! ```
@@ -75,6 +76,7 @@ pub struct ConfigFile {
 #[serde(deny_unknown_fields)]
 pub struct LearningSection {
     pub kappa: Option<f64>,
+    pub fade: Option<f64>,
     pub refit: Option<f64>,
     pub lattice: Option<f64>,
 }
@@ -298,12 +300,16 @@ fn learning(
     let d = crate::server::LearnSettings::default();
     let s = crate::server::LearnSettings {
         kappa: l.kappa.unwrap_or(d.kappa),
+        fade: l.fade.unwrap_or(d.fade),
         refit: l.refit.unwrap_or(d.refit),
         lattice: l.lattice.unwrap_or(d.lattice),
     };
     let invalid = |m: &str| Err(ApiError::Invalid(m.into()));
     if !(0.0..=10.0).contains(&s.kappa) {
         return invalid("learning.kappa: must be in [0, 10]");
+    }
+    if !(s.fade > 0.0 && s.fade <= 1e6) {
+        return invalid("learning.fade: must be in (0, 1e6] s");
     }
     if !(0.1..=3600.0).contains(&s.refit) {
         return invalid("learning.refit: must be in [0.1, 3600] s");
@@ -407,6 +413,7 @@ mod tests {
             ("[actuator]\nk = 0\nbeta = 0.001", "actuator"),
             ("[server]\nliveness = 0", "server.liveness"),
             ("[learning]\nkappa = -1", "learning.kappa"),
+            ("[learning]\nfade = 0", "learning.fade"),
             ("[learning]\nrefit = 0", "learning.refit"),
             ("[learning]\nlattice = 0.5", "learning.lattice"),
             ("[learning]\nspread = 5", "spread"),

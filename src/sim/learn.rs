@@ -12,7 +12,9 @@ use rand_chacha::ChaCha8Rng;
 
 use crate::coverage::{Fleet, InputError, RiskField, grid_lloyd};
 use crate::geometry::{Point, Region};
-use crate::learning::{Adaptive, Gains, GridMap, Lattice, Learner, Params, Quadrature, Sample};
+use crate::learning::{
+    Adaptive, FADE, Gains, GridMap, Lattice, LearnSettings, Learner, Params, Quadrature, Sample,
+};
 
 /// How the simulated fleet measures and learns the field.
 #[derive(Debug, Clone)]
@@ -30,8 +32,11 @@ pub struct LearningConfig {
     pub refit: f64,
     /// The lattice's spacing (and each Gaussian's spread) [m].
     pub spacing: f64,
-    /// Optimism κ: posterior standard deviations added (0: the mean).
+    /// Optimism κ: posterior standard deviations added (0: the mean) at
+    /// first.
     pub kappa: f64,
+    /// The optimism's time constant [s] (`LearnSettings::kappa_at`).
+    pub fade: f64,
     /// What the fleet covers: the belief, or (for comparison) the prior
     /// alone or the truth itself.
     pub cover: Cover,
@@ -100,7 +105,8 @@ enum Estimator {
 
 impl LearningConfig {
     /// The defaults of docs/learning.md: 1 Hz, σ 5 % of the range, no
-    /// outliers, a fit every 5 s, a 10 m lattice, the mean.
+    /// outliers, a fit every 5 s, a 10 m lattice, the mean (an optimism
+    /// fading over [`FADE`] when set).
     pub fn new(truth: RiskField) -> Self {
         LearningConfig {
             truth,
@@ -110,6 +116,7 @@ impl LearningConfig {
             refit: 5.0,
             spacing: 10.0,
             kappa: 0.0,
+            fade: FADE,
             cover: Cover::Learned,
             log: false,
         }
@@ -123,6 +130,10 @@ impl LearningConfig {
         check(
             (0.0..=10.0).contains(&self.kappa),
             "--kappa must be in [0, 10]",
+        )?;
+        check(
+            self.fade > 0.0 && self.fade <= 1e6,
+            "--fade must be in (0, 1e6] s",
         )?;
         check(
             self.noise > 0.0 && self.noise <= 1.0,
@@ -159,6 +170,8 @@ pub(super) struct Learning {
     next_fit: f64,
     /// What the fleet covers now.
     pub(super) cover: RiskField,
+    /// The optimism it was fitted with.
+    pub(super) kappa: f64,
     pub(super) samples: usize,
     pub(super) fits: usize,
     /// The region's bounding box (where the uncertainty is mapped).
@@ -208,12 +221,24 @@ impl Learning {
             next_sample: 0.0,
             next_fit: 0.0,
             cover,
+            kappa: 0.0,
             samples: 0,
             fits: 0,
             bounds: (min, max),
             log: config.log.then(LearnLog::default),
             config: config.clone(),
         })
+    }
+
+    /// The learner's settings as a coordinator's would be.
+    fn settings(&self) -> LearnSettings {
+        let c = &self.config;
+        LearnSettings {
+            kappa: c.kappa,
+            fade: c.fade,
+            refit: c.refit,
+            lattice: c.spacing,
+        }
     }
 
     /// The truth (what H_true is judged on).
@@ -289,7 +314,10 @@ impl Learning {
             self.next_fit += self.config.refit;
         }
         let belief = learner.fit();
-        self.cover = belief.density(self.config.kappa);
+        // Every vessel samples from the first tick on: the oldest sample
+        // is as old as the run.
+        self.kappa = self.settings().kappa_at(t);
+        self.cover = belief.density(self.kappa);
         self.fits += 1;
         if let Some(log) = &mut self.log {
             let (min, max) = self.bounds;

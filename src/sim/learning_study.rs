@@ -18,7 +18,7 @@ use super::{Config, Run, SimError, load_scenario, run};
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct StudyRow {
     /// `clairvoyant`, `no learning`, `learning (mean)`, `learning (κ =
-    /// K)`, `schwager` or `grid Lloyd`.
+    /// K, fade F s)`, `schwager` or `grid Lloyd`.
     pub fleet: String,
     pub seed: u64,
     /// H_true / H★ at the end.
@@ -44,16 +44,20 @@ pub fn run_learning_study(
 ) -> Result<LearningStudy, SimError> {
     let (loaded, headings) = load_scenario(scenario)?;
     let base = Config::new(loaded, headings, duration);
-    if base.learning.is_none() {
+    let Some(learning) = &base.learning else {
         return Err(SimError::Io(format!(
             "{scenario} has no truth: the learning study needs one (docs/learning.md)"
         )));
-    }
+    };
     let ways = [
         ("clairvoyant".to_string(), Cover::Truth, 0.0),
         ("no learning".to_string(), Cover::Prior, 0.0),
         ("learning (mean)".to_string(), Cover::Learned, 0.0),
-        (format!("learning (κ = {kappa})"), Cover::Learned, kappa),
+        (
+            format!("learning (κ = {kappa}, fade {} s)", learning.fade),
+            Cover::Learned,
+            kappa,
+        ),
         ("schwager".to_string(), Cover::Schwager, 0.0),
         ("grid Lloyd".to_string(), Cover::GridLloyd, 0.0),
     ];

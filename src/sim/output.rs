@@ -221,7 +221,9 @@ pub fn write_summary(path: &Path, summary: &Summary) -> std::io::Result<()> {
 pub struct LearningSummary {
     /// `learned`, `prior` (no learning) or `truth` (the clairvoyant).
     pub cover: &'static str,
+    /// The optimism at first, and its time constant [s].
     pub kappa: f64,
+    pub fade_s: f64,
     /// Noise σ as a share of the truth's range.
     pub noise: f64,
     pub outliers: f64,
@@ -263,6 +265,7 @@ impl LearningSummary {
                 super::Cover::GridLloyd => "grid-lloyd",
             },
             kappa: l.kappa,
+            fade_s: l.fade,
             noise: l.noise,
             outliers: l.outliers,
             sample_rate_hz: l.rate,

@@ -18,6 +18,7 @@ use super::run::fleet_at;
 use super::{Config, Run, SimError, Tick, VesselSample};
 use crate::coverage::{Options, RiskField, evaluate};
 use crate::geometry::Point;
+use crate::learning::{FADE, LearnSettings};
 use crate::mission::scenario::{LocalScenario, evaluation_document};
 use crate::mission::{guidance_document, safety_document};
 use crate::protocol::{
@@ -212,7 +213,8 @@ fn status(
 struct LearnReplay<'a> {
     log: Option<&'a LearnLog>,
     cover: RiskField,
-    kappa: f64,
+    /// The optimism (κ at first, its fade), for each belief's document.
+    optimism: LearnSettings,
     next_sample: usize,
     next_belief: usize,
 }
@@ -227,7 +229,11 @@ impl<'a> LearnReplay<'a> {
         LearnReplay {
             log: run.learn_log.as_ref(),
             cover: cover.unwrap_or_else(|| config.scenario.risk.clone()),
-            kappa: learning.map_or(0.0, |l| l.kappa),
+            optimism: LearnSettings {
+                kappa: learning.map_or(0.0, |l| l.kappa),
+                fade: learning.map_or(FADE, |l| l.fade),
+                ..LearnSettings::default()
+            },
             next_sample: 0,
             next_belief: 0,
         }
@@ -264,7 +270,7 @@ impl<'a> LearnReplay<'a> {
                     samples: samples as u64,
                     fits: self.next_belief as u64,
                     fitted_at: Some(*at),
-                    kappa: self.kappa,
+                    kappa: self.optimism.kappa_at(*at),
                     learning: true,
                     uncertainty: Some(grid.clone()),
                 },

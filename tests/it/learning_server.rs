@@ -4,8 +4,9 @@
 //! survey over REST, and one vessel on a real link. Checked: the belief
 //! `GET /api/v1/risk` answers is the map (within 10 % at its peaks), the
 //! vessel's commanded centroid moves to where the map says, each bad sample
-//! is refused alone with its code and counted, and a coordinator without
-//! `[learning]` refuses samples with 409.
+//! is refused alone with its code and counted, a coordinator without
+//! `[learning]` refuses samples with 409, and an optimistic one's optimism
+//! fades with the samples' age.
 
 use std::io::Write;
 use std::process::Stdio;
@@ -386,4 +387,69 @@ async fn the_uncertainty_and_the_samples_are_served_and_recorded() {
         assert_eq!(report["counts"][SAMPLE], 212, "{report}");
         assert_eq!(report["counts"][BELIEF], beliefs.len(), "{report}");
     }
+}
+
+/// The optimism fades (docs/learning.md, "Optimism that fades"): with κ 1
+/// fading over 5 mission seconds, each fit covers κ·exp(−a / 5), a the age
+/// of the oldest sample at the fit, as `GET /api/v1/risk` says; a fit
+/// seven seconds later (the same southern survey and one new sample) is
+/// less than half as optimistic in the water no sample has seen.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_optimism_fades_with_the_age_of_the_samples() {
+    let config = format!("{FLAT}\n[learning]\nrefit = 1.0\nkappa = 1.0\nfade = 5.0\n");
+    let (_server, addr, _dir) = serve(&config, false);
+    let http = reqwest::Client::new();
+    let risk_url = format!("http://{addr}/api/v1/risk");
+    let t0 = mission_time(&http, &addr).await;
+    survey(&http, &addr, 0..5, t0).await;
+    // The first fit after mission time `after` (a fit comes once new
+    // samples have).
+    let fit_after = async |after: f64| {
+        let deadline = tokio::time::Instant::now() + std::time::Duration::from_secs(20);
+        loop {
+            let risk: Value = get_json(&http, &risk_url).await;
+            if risk["fitted_at"].as_f64().is_some_and(|at| at >= after) {
+                break risk;
+            }
+            assert!(tokio::time::Instant::now() < deadline, "no fit: {risk}");
+            tokio::time::sleep(std::time::Duration::from_millis(50)).await;
+        }
+    };
+    let kappa = |risk: &Value| {
+        let (got, at) = (
+            risk["kappa"].as_f64().unwrap(),
+            risk["fitted_at"].as_f64().unwrap(),
+        );
+        let want = (-(at - t0) / 5.0).exp();
+        assert!(
+            (got - want).abs() < 1e-9,
+            "κ {got} at {at}, {want} wanted: {risk}"
+        );
+        got
+    };
+    let first = fit_after(t0).await;
+    let k1 = kappa(&first);
+    // Eight mission seconds on (seven after the first fit at most), one
+    // more sample, far from the north.
+    loop {
+        if mission_time(&http, &addr).await > t0 + 8.0 {
+            break;
+        }
+        tokio::time::sleep(std::time::Duration::from_millis(100)).await;
+    }
+    let t1 = mission_time(&http, &addr).await;
+    let one = json!([{"vessel": "late", "t": t1, "x": 50.0, "y": 10.0,
+                      "value": truth(50.0, 10.0), "sd": 0.1}]);
+    assert_eq!(post(&http, &addr, one).await.0, 200);
+    let later = fit_after(t1).await;
+    let k2 = kappa(&later);
+    assert!(k2 < 0.4 * k1, "κ {k1} then {k2}");
+    let (north1, north2) = (
+        density_at(&first["risk"], 50.0, 90.0),
+        density_at(&later["risk"], 50.0, 90.0),
+    );
+    assert!(
+        north1 > 1.0 && north2 < 0.5 * north1,
+        "unseen water: {north1} at first, {north2} later"
+    );
 }

@@ -4,8 +4,8 @@
 //! reaches 99.5 % of H★ within 300 s for seeds 1–5, and the one that does
 //! not stays below 93 %. Of the truths the lattice does not contain ("Other
 //! truths": off the lattice, a plume, zero over half the region), seed 1 of
-//! learning the mean and the fleet that does not learn are run again and
-//! compared with the page's table. A truth that fails validation is named
+//! learning the mean, of the fading optimism and the fleet that does not
+//! learn are run again and compared with the page's table. A truth that fails validation is named
 //! as such. The comparison with Schwager's adaptive law and a grid Lloyd
 //! ("Against Schwager's law and a grid Lloyd") is run again in full and
 //! compared with its table, and what the page says of it with the table.
@@ -134,7 +134,8 @@ fn other_truths() -> Vec<(String, String, (String, String))> {
 }
 
 /// Truths the lattice does not contain: for each, seed 1 of learning the
-/// mean and the fleet that does not learn end as the page prints them.
+/// mean, of the fading optimism and the fleet that does not learn end as
+/// the page prints them.
 #[test]
 fn other_truths_are_what_sim_prints() {
     let rows = other_truths();
@@ -143,8 +144,12 @@ fn other_truths_are_what_sim_prints() {
     assert_eq!(truths.len(), 3, "three truths: {truths:?}");
     for truth in truths {
         let scenario = format!("{EXAMPLES}/{truth}.json");
-        let runs: [(&str, &[&str]); 2] = [
+        let runs: [(&str, &[&str]); 3] = [
             ("learning (mean)", &["--seed", "1"]),
+            (
+                "learning (κ = 1, fade 30 s)",
+                &["--seed", "1", "--kappa", "1"],
+            ),
             ("no learning", &["--cover", "prior"]),
         ];
         for (fleet, args) in runs {
@@ -196,15 +201,14 @@ fn a_bad_truth_is_named_and_refused() {
     assert!(err.contains("--noise must be in (0, 1]"), "{err}");
 }
 
-/// `sim learning-study`: the six ways of covering for one seed, its table,
-/// JSON and figure; the clairvoyant ends at H★ by definition, and the
-/// learning fleet ends above the one that does not learn.
-#[test]
-fn the_learning_study_compares_six_fleets() {
+/// `seacover sim learning-study --scenario SCENARIO --seeds SEEDS
+/// --duration SECS` into a new directory: the directory and what it
+/// printed.
+fn study(seeds: &str, secs: &str) -> (tempfile::TempDir, String) {
     let dir = tempfile::tempdir().unwrap();
     let out = Command::new(env!("CARGO_BIN_EXE_seacover"))
         .args(["sim", "learning-study", "--scenario", SCENARIO])
-        .args(["--seeds", "1", "--duration", "150", "--out"])
+        .args(["--seeds", seeds, "--duration", secs, "--out"])
         .arg(dir.path())
         .output()
         .expect("the binary runs");
@@ -213,8 +217,18 @@ fn the_learning_study_compares_six_fleets() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+    let printed = String::from_utf8_lossy(&out.stdout).into_owned();
+    (dir, printed)
+}
+
+/// `sim learning-study`: the six ways of covering for one seed, its table,
+/// JSON and figure; the clairvoyant ends at H★ by definition, and the
+/// learning fleet ends above the one that does not learn.
+#[test]
+fn the_learning_study_compares_six_fleets() {
+    let (dir, printed) = study("1", "150");
     let table = std::fs::read_to_string(dir.path().join("table.md")).unwrap();
-    assert_eq!(String::from_utf8_lossy(&out.stdout), table);
+    assert_eq!(printed, table);
     assert_eq!(table.lines().count(), 8, "{table}");
     assert!(
         table.starts_with("| fleet | H_true / H★ at 150 s, each seed | at or above 99.5 % from, each seed | at or above 99 % from, each seed |\n"),
@@ -282,24 +296,12 @@ fn the_comparison_with_schwager_and_grid_lloyd_is_what_the_study_prints() {
             "clairvoyant",
             "no learning",
             "learning (mean)",
-            "learning (κ = 1)",
+            "learning (κ = 1, fade 30 s)",
             "schwager",
             "grid Lloyd"
         ]
     );
-    let dir = tempfile::tempdir().unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_seacover"))
-        .args(["sim", "learning-study", "--scenario", SCENARIO])
-        .args(["--seeds", "5", "--duration", "300", "--out"])
-        .arg(dir.path())
-        .output()
-        .expect("the binary runs");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let printed = String::from_utf8_lossy(&out.stdout);
+    let (_dir, printed) = study("5", "300");
     let page_text = std::fs::read_to_string(PAGE).unwrap();
     for line in printed.lines() {
         assert!(page_text.contains(line), "not on the page: {line}");

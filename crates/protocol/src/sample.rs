@@ -69,7 +69,8 @@ pub struct BeliefDocument {
     /// Mission time of the samples the newest fit saw [s].
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub fitted_at: Option<f64>,
-    /// Optimism: posterior standard deviations added (0: the mean).
+    /// The optimism this density was fitted with: posterior standard
+    /// deviations added (0: the mean), fading as the samples age.
     pub kappa: f64,
     /// Whether the coordinator learns at all (`[learning]`).
     #[serde(default)]

@@ -269,11 +269,18 @@ async fn fit_when_due(
             continue;
         };
         let until = until + period;
-        let (samples, digest) = l.book.lock().expect("book lock").until(until);
+        let ((samples, digest), oldest) = {
+            let book = l.book.lock().expect("book lock");
+            (book.until(until), book.oldest(until))
+        };
         if samples.is_empty() || fitted == Some((rev.revision, digest)) {
             continue;
         }
         let settings = l.settings;
+        // The optimism fades with the oldest sample's age in mission
+        // seconds (docs/learning.md, "Optimism that fades").
+        let age = (until - oldest.unwrap_or(until)) * warp;
+        let kappa = settings.kappa_at(age);
         let fit = tokio::task::spawn_blocking(move || {
             let (min, max) = rev.mission.region().bounds();
             let lattice = Lattice::over(min, max, settings.lattice).ok()?;
@@ -284,7 +291,7 @@ async fn fit_when_due(
             }
             Some(Belief {
                 revision: rev.revision,
-                density: learner.fit().density(settings.kappa),
+                density: learner.fit().density(kappa),
                 digest,
                 fitted,
                 until,

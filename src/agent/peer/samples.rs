@@ -247,6 +247,18 @@ impl Book {
         (out, h)
     }
 
+    /// When the oldest sample held that was taken at `until` or before
+    /// was taken (sender's UTC): members that hold the same samples agree
+    /// on it, as on [`Book::until`]'s set.
+    pub fn oldest(&self, until: f64) -> Option<f64> {
+        self.sources
+            .values()
+            .flat_map(|source| source.held.values())
+            .map(|held| held.t)
+            .filter(|&t| t <= until)
+            .reduce(f64::min)
+    }
+
     /// Each source with a gap, and the first number missing.
     pub fn gaps(&self) -> Vec<(String, u32)> {
         self.sources
@@ -317,6 +329,10 @@ mod tests {
         assert_eq!(two.until(1.7e9 + 9.5).1, digest);
         assert_eq!(one.len(), 150);
         assert_eq!(one.offer(&docs[7], NOW), Ok(Offered::Known));
+        // The oldest sample (the optimism's age) is the books' common one.
+        assert_eq!(one.oldest(f64::MAX), Some(1.7e9));
+        assert_eq!(two.oldest(1.7e9 + 9.5), one.oldest(1.7e9 + 9.5));
+        assert_eq!(one.oldest(1.7e9 - 1.0), None);
     }
 
     #[test]

@@ -185,6 +185,15 @@ pub(crate) struct PeerLearnArgs {
     /// Optimism: posterior standard deviations added (0: the mean).
     #[arg(long, value_name = "K", default_value_t = 0.0, requires = "learn")]
     kappa: f64,
+    /// The optimism's time constant: κ fades as κ·exp(−age / SECONDS),
+    /// age that of the oldest sample held.
+    #[arg(
+        long,
+        value_name = "SECONDS",
+        default_value_t = seacover::learning::FADE,
+        requires = "learn"
+    )]
+    fade: f64,
     /// Mission seconds between fits.
     #[arg(
         long,
@@ -222,6 +231,10 @@ impl PeerLearnArgs {
             "--kappa must be in [0, 10]"
         );
         anyhow::ensure!(
+            self.fade > 0.0 && self.fade <= 1e6,
+            "--fade must be in (0, 1e6] s"
+        );
+        anyhow::ensure!(
             (0.1..=3600.0).contains(&self.refit),
             "--refit must be in [0.1, 3600] s"
         );
@@ -231,6 +244,7 @@ impl PeerLearnArgs {
         );
         config.learning = Some(seacover::agent::peer::learn::LearnSettings {
             kappa: self.kappa,
+            fade: self.fade,
             refit: self.refit,
             lattice: self.lattice,
         });

@@ -72,6 +72,7 @@ struct Job {
 /// A fit's result.
 struct Fitted {
     density: RiskField,
+    kappa: f64,
     uncertainty: UncertaintyDocument,
     at: f64,
 }
@@ -101,6 +102,7 @@ impl Worker {
                     if done
                         .send(Fitted {
                             density: belief.density(job.kappa),
+                            kappa: job.kappa,
                             uncertainty: uncertainty(&belief, min, max),
                             at: job.at,
                         })
@@ -133,7 +135,8 @@ impl Drop for Worker {
 /// The coordinator's learner.
 pub(super) struct Learning {
     settings: LearnSettings,
-    window: VecDeque<Sample>,
+    /// The newest samples, each with its own time [mission s].
+    window: VecDeque<(f64, Sample)>,
     recent: VecDeque<SampleDocument>,
     buckets: HashMap<String, Bucket>,
     worker: Worker,
@@ -141,6 +144,8 @@ pub(super) struct Learning {
     uncertainty: Option<UncertaintyDocument>,
     fits: u64,
     fitted_at: Option<f64>,
+    /// The optimism the belief covered was fitted with.
+    kappa: f64,
     next_fit: f64,
     /// Samples taken since the newest fit began.
     fresh: bool,
@@ -158,6 +163,7 @@ impl Learning {
             uncertainty: None,
             fits: 0,
             fitted_at: None,
+            kappa: 0.0,
             next_fit: 0.0,
             fresh: false,
         }
@@ -193,7 +199,7 @@ impl Learning {
         for (index, s) in batch.into_iter().enumerate() {
             match self.judge(&s, (min, max), now) {
                 Ok(sample) => {
-                    self.window.push_back(sample);
+                    self.window.push_back((s.t, sample));
                     if self.window.len() > WINDOW {
                         self.window.pop_front();
                     }
@@ -312,6 +318,7 @@ impl Learning {
             self.uncertainty = Some(fitted.uncertainty);
             self.fits += 1;
             self.fitted_at = Some(fitted.at);
+            self.kappa = fitted.kappa;
             metrics::counter!(crate::server::metrics::FITS).increment(1);
             if recorder.is_on() {
                 recorder.belief(now, self.document(mission));
@@ -327,11 +334,14 @@ impl Learning {
             // mission's own risk.
             return;
         };
+        // The optimism fades with the age of the oldest sample held
+        // (docs/learning.md, "Optimism that fades").
+        let oldest = self.window.iter().map(|w| w.0).fold(now, f64::min);
         let job = Job {
             lattice,
             prior: mission.risk().clone(),
-            samples: self.window.iter().copied().collect(),
-            kappa: self.settings.kappa,
+            samples: self.window.iter().map(|w| w.1).collect(),
+            kappa: self.settings.kappa_at(now - oldest),
             at: now,
             bounds: (min, max),
         };
@@ -377,7 +387,7 @@ impl Learning {
             samples: self.window.len() as u64,
             fits: self.fits,
             fitted_at: self.fitted_at,
-            kappa: self.settings.kappa,
+            kappa: self.kappa,
             learning: true,
             uncertainty: self.uncertainty.clone(),
         }

@@ -58,26 +58,64 @@ use crate::geometry::Point;
 use crate::geometry::region::MAX_COORDINATE;
 
 /// How a fleet learns, wherever it learns (a coordinator's `[learning]`, a
-/// peer fleet's `--learn`): the optimism it covers with, how often it
-/// fits, and its lattice.
+/// peer fleet's `--learn`): the optimism it covers with and how it fades,
+/// how often it fits, and its lattice.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LearnSettings {
-    /// Optimism: posterior standard deviations added (0: the mean).
+    /// Optimism: posterior standard deviations added (0: the mean) when
+    /// learning starts.
     pub kappa: f64,
+    /// The optimism's time constant [mission s]: κ fades as
+    /// κ · exp(−age / fade) with the age of the oldest sample held
+    /// ([`LearnSettings::kappa_at`]).
+    pub fade: f64,
     /// Mission seconds between fits.
     pub refit: f64,
     /// The lattice's spacing and each Gaussian's spread [m].
     pub lattice: f64,
 }
 
+/// The optimism's time constant unless set [mission s]: about half the
+/// time a vessel of the paper's scenario takes to cross its 100 m square
+/// (docs/learning.md, "Optimism that fades").
+pub const FADE: f64 = 30.0;
+
 impl Default for LearnSettings {
-    /// The mean, a fit every 5 mission seconds, a 10 m lattice.
+    /// The mean (optimism fading over [`FADE`] when set), a fit every 5
+    /// mission seconds, a 10 m lattice.
     fn default() -> Self {
         LearnSettings {
             kappa: 0.0,
+            fade: FADE,
             refit: 5.0,
             lattice: 10.0,
         }
+    }
+}
+
+impl LearnSettings {
+    /// The optimism to cover with when the oldest sample held is `age`
+    /// mission seconds old: κ · exp(−age / fade), κ at first and the mean
+    /// once the fleet has had time to look. An optimism that stays
+    /// leaves water no vessel will visit attractive for ever (vessels at
+    /// rest sample only where they rest), so the fleet spreads as over a
+    /// flat map; one that fades explores first and then covers what it
+    /// found. A negative or non-finite age counts as 0; `fade` is
+    /// validated finite and > 0 where it is read.
+    ///
+    /// ```
+    /// use seacover_engine::learning::LearnSettings;
+    /// let s = LearnSettings { kappa: 1.0, fade: 30.0, ..LearnSettings::default() };
+    /// assert_eq!(s.kappa_at(0.0), 1.0);
+    /// assert!((s.kappa_at(30.0) - (-1.0f64).exp()).abs() < 1e-15);
+    /// assert!(s.kappa_at(600.0) < 1e-8);
+    /// ```
+    pub fn kappa_at(&self, age: f64) -> f64 {
+        let age = if age.is_finite() { age.max(0.0) } else { 0.0 };
+        if self.kappa == 0.0 {
+            return 0.0;
+        }
+        self.kappa * (-age / self.fade.max(f64::MIN_POSITIVE)).exp()
     }
 }
 

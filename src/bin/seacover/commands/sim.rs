@@ -85,6 +85,9 @@ struct Learning {
     /// the mean).
     #[arg(long, value_name = "K", default_value_t = 0.0)]
     kappa: f64,
+    /// The optimism's time constant: κ fades as κ·exp(−t / SECONDS).
+    #[arg(long, value_name = "SECONDS", default_value_t = seacover::learning::FADE)]
+    fade: f64,
     /// Sample noise σ, as a share of the truth's range.
     #[arg(long, value_name = "SHARE", default_value_t = 0.05)]
     noise: f64,
@@ -112,7 +115,8 @@ impl Learning {
             Cover::Schwager => seacover::sim::Cover::Schwager,
             Cover::GridLloyd => seacover::sim::Cover::GridLloyd,
         };
-        (l.kappa, l.noise, l.outliers) = (self.kappa, self.noise, self.outliers);
+        (l.kappa, l.fade) = (self.kappa, self.fade);
+        (l.noise, l.outliers) = (self.noise, self.outliers);
         (l.rate, l.refit, l.spacing) = (self.sample_rate, self.refit, self.lattice);
         l.validate().map_err(anyhow::Error::msg)
     }
