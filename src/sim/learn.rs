@@ -170,8 +170,6 @@ pub(super) struct Learning {
     next_fit: f64,
     /// What the fleet covers now.
     pub(super) cover: RiskField,
-    /// The optimism it was fitted with.
-    pub(super) kappa: f64,
     pub(super) samples: usize,
     pub(super) fits: usize,
     /// The region's bounding box (where the uncertainty is mapped).
@@ -221,7 +219,6 @@ impl Learning {
             next_sample: 0.0,
             next_fit: 0.0,
             cover,
-            kappa: 0.0,
             samples: 0,
             fits: 0,
             bounds: (min, max),
@@ -316,8 +313,7 @@ impl Learning {
         let belief = learner.fit();
         // Every vessel samples from the first tick on: the oldest sample
         // is as old as the run.
-        self.kappa = self.settings().kappa_at(t);
-        self.cover = belief.density(self.kappa);
+        self.cover = belief.density(self.settings().kappa_at(t));
         self.fits += 1;
         if let Some(log) = &mut self.log {
             let (min, max) = self.bounds;
