@@ -49,7 +49,7 @@ use crate::geometry::{Point, dot, norm2};
 
 /// Gauss–Legendre points per piece.
 const NODES: usize = 12;
-static GL: LazyLock<([f64; NODES], [f64; NODES])> = LazyLock::new(|| {
+pub(super) static GL: LazyLock<([f64; NODES], [f64; NODES])> = LazyLock::new(|| {
     let (x, w) = gauss_legendre_01(NODES);
     (
         x.try_into().expect("NODES nodes"),
@@ -63,7 +63,7 @@ const CUTOFF: f64 = 50.0;
 /// Longest piece in widths 1/√a of the Gaussian: at 2 the 12-point rule's
 /// error is ~1e-16 relative for e^{−a s²} on [0, 2/√a] (≤ 5e-16 on a piece
 /// centred on s = 0), less for the mass integrands.
-const WIDTHS: f64 = 2.0;
+pub(super) const WIDTHS: f64 = 2.0;
 
 /// Longest piece in local decay lengths 1/(a u) where the piece starts at
 /// u > 0: there e^{−a s²} ≈ e^{−a u²} e^{−2 a u (s − u)}, and pieces of
@@ -76,6 +76,25 @@ pub(super) const DECAY: f64 = 3.0;
 /// split form and must be set exactly when g's centre is outside the polygon
 /// with a·dist² ≥ 1 (see [`crate::geometry::ring_distances`]).
 pub fn polygon_integrals<R: AsRef<[Point]>>(rings: &[R], g: &Gaussian, far: bool) -> [f64; 3] {
+    polygon_integrals_above(rings, g, far, f64::NEG_INFINITY)
+}
+
+/// [`polygon_integrals`] without the parts of edges where g is below
+/// e^`floor`: from the first point of an edge's half (either side of the
+/// foot of the perpendicular) where g < e^`floor`, the rest of that half is
+/// left out (far form) or taken as if g were 0 there (near form: the
+/// closed-form tail). For s ≥ u, e^{−a(h² + s²)} ≤ e^{−a(h² + u²)} < e^`floor`,
+/// so each half so cut changes the mass, (|h|/2a) ∫ e^{…}/(h² + s²) ds, by
+/// less than e^`floor` π / (4a) (∫_0^∞ |h| / (h² + s²) ds = π/2), and
+/// ∫ (x − m) g, (1/2a) |∫ e^{…} n ds|, by less than e^`floor` √π / (4a^{3/2})
+/// (∫_u^∞ e^{−a s²} ds ≤ e^{−a u²} √π / (2√a)).
+/// [`integrate`](super::integrate) sets `floor` from its error budget.
+pub fn polygon_integrals_above<R: AsRef<[Point]>>(
+    rings: &[R],
+    g: &Gaussian,
+    far: bool,
+    floor: f64,
+) -> [f64; 3] {
     let m = g.center;
     // e^λ once for the polygon (the near form's factor; the far form keeps
     // λ inside its exponentials).
@@ -87,7 +106,7 @@ pub fn polygon_integrals<R: AsRef<[Point]>>(rings: &[R], g: &Gaussian, far: bool
         let n = ring.len();
         for i in 0..n {
             let (mass_part, line) =
-                segment_scaled(ring[i] - m, ring[(i + 1) % n] - m, g, far, scale);
+                segment_scaled(ring[i] - m, ring[(i + 1) % n] - m, g, far, scale, floor);
             mass += mass_part;
             moment = moment + line;
         }
@@ -103,12 +122,20 @@ pub fn polygon_integrals<R: AsRef<[Point]>>(rings: &[R], g: &Gaussian, far: bool
 /// curved cell ([`curved`](super::curved)).
 pub(super) fn segment(a: Point, b: Point, g: &Gaussian, far: bool) -> (f64, Point) {
     let scale = if far { 0.0 } else { g.log_weight.exp() };
-    segment_scaled(a, b, g, far, scale)
+    segment_scaled(a, b, g, far, scale, f64::NEG_INFINITY)
 }
 
-/// [`segment`] with the near form's e^λ given.
+/// [`segment`] with the near form's e^λ given, cut below e^`floor` as
+/// [`polygon_integrals_above`] says.
 #[inline]
-fn segment_scaled(a: Point, b: Point, g: &Gaussian, far: bool, scale: f64) -> (f64, Point) {
+fn segment_scaled(
+    a: Point,
+    b: Point,
+    g: &Gaussian,
+    far: bool,
+    scale: f64,
+    floor: f64,
+) -> (f64, Point) {
     let len = norm2(b - a).sqrt();
     if len == 0.0 {
         return (0.0, Point { x: 0.0, y: 0.0 });
@@ -117,15 +144,26 @@ fn segment_scaled(a: Point, b: Point, g: &Gaussian, far: bool, scale: f64) -> (f
     let normal = Point { x: e.y, y: -e.x };
     let h = dot(a, normal);
     let s0 = dot(a, e);
-    let (mass, line) = edge(g.a, g.log_weight, scale, h, s0, s0 + len, far);
+    let (mass, line) = edge(g.a, g.log_weight, scale, h, s0, s0 + len, far, floor);
     (mass, normal * line)
 }
 
 /// One edge on the line at signed distance `h`, for s in [s0, s1]: returns
 /// (its mass contribution, ∫ e^{λ − a r²} ds up to a constant times the
 /// edge length, which cancels around every closed ring). `scale` = e^λ,
-/// used by the near form only.
-fn edge(a: f64, lambda: f64, scale: f64, h: f64, s0: f64, s1: f64, far: bool) -> (f64, f64) {
+/// used by the near form only; where g falls below e^`floor` the rest of
+/// each half is cut ([`polygon_integrals_above`]).
+#[allow(clippy::too_many_arguments)]
+fn edge(
+    a: f64,
+    lambda: f64,
+    scale: f64,
+    h: f64,
+    s0: f64,
+    s1: f64,
+    far: bool,
+    floor: f64,
+) -> (f64, f64) {
     let h2 = h * h;
     let sqrt_a = a.sqrt();
     // An edge across the foot of the perpendicular (s0 < 0 < s1), short
@@ -156,11 +194,13 @@ fn edge(a: f64, lambda: f64, scale: f64, h: f64, s0: f64, s1: f64, far: bool) ->
     for &(u0, u1) in &parts[..count] {
         let mut u = u0;
         while u < u1 {
+            // Below the caller's floor the rest is within its budget.
+            let below = lambda - a * (h2 + u * u) < floor;
             if far {
-                if a * (u * u - u0 * u0) > CUTOFF {
+                if below || a * (u * u - u0 * u0) > CUTOFF {
                     break; // negligible next to this edge's own start
                 }
-            } else if a * (h2 + u * u) > CUTOFF {
+            } else if below || a * (h2 + u * u) > CUTOFF {
                 // e^{−a r²} is gone: (1 − E)/r² = 1/r², and E − 1 = −1.
                 // atan(u₁/h) − atan(u/h) = atan(h (u₁ − u) / (h² + u u₁)) for
                 // 0 ≤ u ≤ u₁, without the cancellation of two angles near
@@ -339,6 +379,24 @@ pub(super) mod tests {
         Point { x, y }
     }
 
+    /// A random convex ring of `n` vertices around the origin, at
+    /// distances between half `size` and `size` (also the lattice path's
+    /// tests).
+    pub(in crate::coverage) fn random_convex_ring(
+        rng: &mut impl RngExt,
+        n: usize,
+        size: f64,
+    ) -> Vec<Point> {
+        let mut angles: Vec<f64> = (0..n)
+            .map(|_| rng.random_range(0.0..std::f64::consts::TAU))
+            .collect();
+        angles.sort_by(f64::total_cmp);
+        angles
+            .iter()
+            .map(|t| p(t.cos(), t.sin()) * (size * rng.random_range(0.5..1.0)))
+            .collect()
+    }
+
     /// Distance in units of the last place of `b` (also the curved
     /// quadrature's tests).
     pub(in crate::coverage) fn ulps(a: f64, b: f64) -> f64 {
@@ -481,7 +539,7 @@ pub(super) mod tests {
             }
             let lambda: f64 = rng.random_range(-3.0..1.0);
             let scale = if far { 0.0 } else { lambda.exp() };
-            let new = edge(a, lambda, scale, h, s0, s1, far);
+            let new = edge(a, lambda, scale, h, s0, s1, far, f64::NEG_INFINITY);
             let old = previous_edge(a, lambda, h, s0, s1, far, true);
             for (n, o) in [(new.0, old.0), (new.1, old.1)] {
                 let e = if o == 0.0 {
@@ -511,14 +569,7 @@ pub(super) mod tests {
         for _ in 0..3000 {
             let n = rng.random_range(3..10);
             let size = 10f64.powf(rng.random_range(0.5..2.7));
-            let mut angles: Vec<f64> = (0..n)
-                .map(|_| rng.random_range(0.0..std::f64::consts::TAU))
-                .collect();
-            angles.sort_by(f64::total_cmp);
-            let ring: Vec<Point> = angles
-                .iter()
-                .map(|t| p(t.cos(), t.sin()) * (size * rng.random_range(0.5..1.0)))
-                .collect();
+            let ring = random_convex_ring(&mut rng, n, size);
             if !crate::geometry::ring_distances(&[&ring], p(0.0, 0.0)).inside {
                 continue; // the vessel is in its own cell
             }

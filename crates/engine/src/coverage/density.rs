@@ -3,6 +3,9 @@
 //! Objects sit in an R-tree so that a cell only looks at the objects that can
 //! change its integrals by more than a fraction of the tolerance; far objects
 //! are cut off with a bound, not a guess (see [`RiskField::objects_near`]).
+//! Objects of one σ whose centres lie on a grid (a learned belief's lattice,
+//! docs/learning.md) are found once, here, so that a cell can integrate
+//! them together ([`ObjectGrid`]).
 
 use rstar::RTree;
 use rstar::primitives::GeomWithData;
@@ -27,11 +30,67 @@ pub struct RiskObject {
     pub sigma: f64,
 }
 
+/// The most objects of one σ, when their centres fill at least a quarter of
+/// the points of a grid (columns × rows of their distinct coordinates).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ObjectGrid {
+    /// Their common σ [m].
+    pub sigma: f64,
+    /// The columns' x, increasing.
+    pub xs: Vec<f64>,
+    /// The rows' y, increasing.
+    pub ys: Vec<f64>,
+    /// Per object: its (column, row), or `None` for an object off the grid.
+    pub at: Vec<Option<(u32, u32)>>,
+}
+
+/// Fewest objects worth a grid: below, one by one is as cheap.
+const GRID_MIN: usize = 16;
+
+impl ObjectGrid {
+    /// The grid of `objects`, if they have one.
+    fn find(objects: &[RiskObject]) -> Option<ObjectGrid> {
+        let mut count = std::collections::BTreeMap::new();
+        for o in objects {
+            *count.entry(o.sigma.to_bits()).or_insert(0usize) += 1;
+        }
+        // The most common σ; the smallest of equally common ones.
+        let (&bits, &n) = count
+            .iter()
+            .max_by(|a, b| a.1.cmp(b.1).then(b.0.cmp(a.0)))?;
+        let sigma = f64::from_bits(bits);
+        if n < GRID_MIN {
+            return None;
+        }
+        let distinct = |f: fn(&RiskObject) -> f64| {
+            let mut v: Vec<f64> = objects.iter().filter(|o| o.sigma == sigma).map(f).collect();
+            v.sort_by(f64::total_cmp);
+            v.dedup();
+            v
+        };
+        let (xs, ys) = (distinct(|o| o.center.x), distinct(|o| o.center.y));
+        if xs.len() * ys.len() > 4 * n {
+            return None;
+        }
+        let index = |v: &[f64], x: f64| v.binary_search_by(|y| y.total_cmp(&x)).ok();
+        let at = objects
+            .iter()
+            .map(|o| {
+                let i = index(&xs, o.center.x)?;
+                let j = index(&ys, o.center.y)?;
+                (o.sigma == sigma).then_some((i as u32, j as u32))
+            })
+            .collect();
+        Some(ObjectGrid { sigma, xs, ys, at })
+    }
+}
+
 /// A validated risk density.
 #[derive(Debug, Clone)]
 pub struct RiskField {
     base: f64,
     objects: Vec<RiskObject>,
+    grid: Option<ObjectGrid>,
     tree: RTree<GeomWithData<[f64; 2], usize>>,
     alpha_max: f64,
     sigma_max: f64,
@@ -69,6 +128,7 @@ impl RiskField {
         let sigma_max = objects.iter().map(|o| o.sigma).fold(0.0, f64::max);
         Ok(RiskField {
             base,
+            grid: ObjectGrid::find(&objects),
             objects,
             tree,
             alpha_max,
@@ -84,6 +144,11 @@ impl RiskField {
     /// The objects, in the order given.
     pub fn objects(&self) -> &[RiskObject] {
         &self.objects
+    }
+
+    /// The objects that lie on one grid, if enough do.
+    pub fn grid(&self) -> Option<&ObjectGrid> {
+        self.grid.as_ref()
     }
 
     /// Φ(q).

@@ -16,7 +16,7 @@ use super::curved::{integrate_pieces, pieces_box};
 use super::density::RiskField;
 use super::fleet::Fleet;
 use super::gaussian::Gaussian;
-use super::integrate::{Tolerance, integrate};
+use super::integrate::{GridTerms, Tolerance, integrate_with_grid};
 use super::partition::CellGeometry;
 use crate::geometry::arcs::Piece;
 use crate::geometry::{Point, Region, bounds};
@@ -154,7 +154,10 @@ pub fn cell_figures(
 
     let ln_k = vessel.k.ln();
     let mut terms = Vec::new();
+    // Per term, its place on the risk's grid of objects (none for the base).
+    let mut on_grid = Vec::new();
     if risk.base() > 0.0 {
+        on_grid.push(None);
         terms.push(Gaussian {
             log_weight: ln_k + risk.base().ln(),
             a: beta,
@@ -173,10 +176,12 @@ pub fn cell_figures(
             a,
             center: s * (b / a),
         });
+        on_grid.push(risk.grid().and_then(|g| g.at[j]));
     }
     let weightless = terms.is_empty();
     if weightless {
         // Φ ≡ 0: the centroid is the limit of φ0 → 0⁺, the mass is 0.
+        on_grid.push(None);
         terms.push(Gaussian {
             log_weight: 0.0,
             a: beta,
@@ -184,7 +189,22 @@ pub fn cell_figures(
         });
     }
     let r = if pieces.is_empty() {
-        integrate(&rings, &terms, tol)
+        // The grid's centres as the terms have them: the same operations,
+        // so a term on the grid sits exactly on its column and row.
+        let local = risk.grid().map(|g| {
+            let b = 1.0 / (2.0 * g.sigma * g.sigma);
+            let a = beta + b;
+            let xs: Vec<f64> = g.xs.iter().map(|x| (x - p.x) * (b / a)).collect();
+            let ys: Vec<f64> = g.ys.iter().map(|y| (y - p.y) * (b / a)).collect();
+            (a, xs, ys)
+        });
+        let grid = local.as_ref().map(|(a, xs, ys)| GridTerms {
+            a: *a,
+            xs,
+            ys,
+            at: &on_grid,
+        });
+        integrate_with_grid(&rings, &terms, grid, tol)
     } else {
         integrate_pieces(&pieces, local_box, &terms, tol)
     };

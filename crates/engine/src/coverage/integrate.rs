@@ -16,9 +16,23 @@
 //! end and may then underflow to 0, which is the true value in f64.
 //!
 //! ## Cut-off
-//! A term whose upper bound on the cell is below `1e-3 · tol / T` times a lower
+//! A term whose upper bound on the cell is below `5e-4 · tol / T` times a lower
 //! bound of the whole integrand there is dropped: together the dropped terms
-//! change the integrals by less than 1e-3 tol relative.
+//! change the mass by less than 5e-4 tol relative (and the first moment by
+//! as much times the cell's reach R from the origin). In [`Mode::Boundary`]
+//! the edges are cut as well: where a term falls below a floor set so that
+//! the left-out parts of all T terms' edges add up to at most 5e-4 tol of a
+//! lower bound of the mass (and 5e-4 tol R of the moment; see
+//! [`polygon_integrals_above`]), the rest of that edge is left out. So the
+//! two cuts together stay within 1e-3 tol, relative, of the mass, and the
+//! centroid moves by less than 2e-3 tol R. The mass's lower bound is the
+//! larger of the integrand's lower bound times the area and the mass of the
+//! terms already integrated (all terms are non-negative), so the terms are
+//! integrated largest first.
+//!
+//! Terms that sit on one grid ([`GridTerms`]: a learned belief's lattice)
+//! are integrated together in the boundary method, by [`super::grid`],
+//! when that costs less than one by one; they are not cut by edge.
 //!
 //! ## Methods
 //! - [`Mode::Boundary`] (default): each Gaussian's integrals over the polygon
@@ -36,8 +50,9 @@ use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 use std::sync::LazyLock;
 
-use super::boundary::polygon_integrals;
+use super::boundary::polygon_integrals_above;
 pub use super::gaussian::Gaussian;
+use super::grid::{Window, grid_integrals, pieces};
 use crate::geometry::{Point, RingDistances, TriangleRule, bounds, cross, norm2, ring_distances};
 
 static RULE_HI: LazyLock<TriangleRule> = LazyLock::new(|| TriangleRule::collapsed_gauss(6));
@@ -137,6 +152,33 @@ impl Ord for Piece {
 /// an oriented chain such as [`CellGeometry::Clipped`](super::CellGeometry)
 /// holds. Coordinates relative to the vessel.
 pub fn integrate(rings: &[Vec<Point>], terms: &[Gaussian], tol: Tolerance) -> Scaled {
+    integrate_with_grid(rings, terms, None, tol)
+}
+
+/// Terms of one decay whose centres lie on a grid, in the coordinates of
+/// the integral, and which of [`integrate_with_grid`]'s terms they are.
+#[derive(Debug, Clone, Copy)]
+pub struct GridTerms<'a> {
+    /// The decay a of every term on the grid [1/m²].
+    pub a: f64,
+    /// Column centres x_i.
+    pub xs: &'a [f64],
+    /// Row centres y_j.
+    pub ys: &'a [f64],
+    /// Per term: its (column, row) on the grid, or `None` for a term off it.
+    /// A term on the grid has decay `a` and centre (x_i, y_j) exactly.
+    pub at: &'a [Option<(u32, u32)>],
+}
+
+/// [`integrate`], with the terms that lie on `grid` integrated together
+/// in [`Mode::Boundary`] (see the module doc); the same integrals to
+/// rounding.
+pub fn integrate_with_grid(
+    rings: &[Vec<Point>],
+    terms: &[Gaussian],
+    grid: Option<GridTerms>,
+    tol: Tolerance,
+) -> Scaled {
     let empty = Scaled {
         mass: 0.0,
         moment: Point { x: 0.0, y: 0.0 },
@@ -151,7 +193,7 @@ pub fn integrate(rings: &[Vec<Point>], terms: &[Gaussian], tol: Tolerance) -> Sc
     if diam == 0.0 {
         return empty;
     }
-    let (kept, s) = kept_terms(&rings, terms, tol);
+    let (kept, s, floor) = kept_terms(&rings, terms, tol);
     let scaled = |sum: [f64; 3]| Scaled {
         mass: sum[0],
         moment: Point {
@@ -162,34 +204,149 @@ pub fn integrate(rings: &[Vec<Point>], terms: &[Gaussian], tol: Tolerance) -> Sc
     };
 
     if tol.mode == Mode::Boundary {
-        let mut sum = [0.0; 3];
-        for (g, far) in &kept {
-            let v = polygon_integrals(&rings, g, *far);
-            for (acc, x) in sum.iter_mut().zip(v) {
-                *acc += x;
-            }
-        }
-        return scaled(sum);
+        return scaled(boundary_sum(&rings, kept, floor, grid, tol));
     }
 
     let triangles = fans(&rings);
     if triangles.is_empty() {
         return empty;
     }
-    let kept: Vec<Gaussian> = kept.into_iter().map(|(g, _)| g).collect();
+    let kept: Vec<Gaussian> = kept.into_iter().map(|k| k.term).collect();
     let a_max = kept.iter().map(|t| t.a).fold(0.0, f64::max);
     let start = presplit(triangles, KAPPA * KAPPA / a_max, tol.max_triangles);
     scaled(adapt(start, &kept, diam, tol))
 }
 
-/// The terms that matter over the cell, each scaled by e^(−s) and with
-/// whether its centre is far outside the cell (which selects the boundary
-/// method's split form), and s, the largest log bound.
-fn kept_terms(
+/// A term that matters over the cell.
+struct Kept {
+    /// The term scaled by e^(−s).
+    term: Gaussian,
+    /// Whether its centre is far outside the cell (the boundary method's
+    /// split form).
+    far: bool,
+    /// Its index among the terms.
+    index: usize,
+    /// Its log upper bound on the cell, less s.
+    bound: f64,
+}
+
+/// The [`Mode::Boundary`] sum over the kept terms: the grid's together
+/// when that is cheaper, the others one by one, largest first, each cut
+/// below the floor the module doc's budget allows. `floor` is the log lower
+/// bound of the scaled integrand on the cell.
+fn boundary_sum(
     rings: &[&Vec<Point>],
-    terms: &[Gaussian],
+    mut kept: Vec<Kept>,
+    floor: f64,
+    grid: Option<GridTerms>,
     tol: Tolerance,
-) -> (Vec<(Gaussian, bool)>, f64) {
+) -> [f64; 3] {
+    let mut sum = [0.0; 3];
+    if let Some(grid) = grid {
+        sum = grid_sum(rings, &mut kept, floor, &grid);
+    }
+    kept.sort_by(|a, b| b.bound.total_cmp(&a.bound));
+    let mut area = 0.0;
+    for ring in rings {
+        let n = ring.len();
+        area += (0..n)
+            .map(|i| cross(ring[i], ring[(i + 1) % n]))
+            .sum::<f64>()
+            * 0.5;
+    }
+    let (lo, hi) = bounds(rings.iter().copied().flatten());
+    let reach = [
+        lo,
+        hi,
+        Point { x: lo.x, y: hi.y },
+        Point { x: hi.x, y: lo.y },
+    ]
+    .map(norm2)
+    .into_iter()
+    .fold(0.0, f64::max)
+    .sqrt();
+    // Cut halves of edges: at most two per edge and term.
+    let halves: usize = 2 * rings.iter().map(|r| r.len()).sum::<usize>() * kept.len().max(1);
+    let share = (5e-4 * tol.relative / halves as f64).ln();
+    let area_bound = floor + area.max(0.0).ln();
+    for k in &kept {
+        let g = &k.term;
+        // Each cut half: Δmass < e^floor π/(4a), Δ∫(x − m) g < that / √a,
+        // and ∫ x g moves by |m| Δmass more (polygon_integrals_above).
+        let lower = area_bound.max(sum[0].ln());
+        let per_moment = (reach / (1.0 / g.a.sqrt() + norm2(g.center).sqrt())).min(1.0);
+        let cut = lower + share + (4.0 * g.a / std::f64::consts::PI).ln() + per_moment.ln();
+        let v = polygon_integrals_above(rings, g, k.far, cut);
+        for (acc, x) in sum.iter_mut().zip(v) {
+            *acc += x;
+        }
+    }
+    sum
+}
+
+/// Takes the kept terms on `grid` out of `kept` and integrates them
+/// together, when that is cheaper than one by one and their scaled
+/// weights are safely within floating point (else leaves them).
+fn grid_sum(rings: &[&Vec<Point>], kept: &mut Vec<Kept>, floor: f64, grid: &GridTerms) -> [f64; 3] {
+    let on: Vec<(usize, (u32, u32))> = kept
+        .iter()
+        .enumerate()
+        .filter_map(|(k, t)| grid.at[t.index].map(|at| (k, at)))
+        .collect();
+    let none = [0.0; 3];
+    if on.len() < 2 || floor < -300.0 || on.iter().any(|&(k, _)| kept[k].term.log_weight > 300.0) {
+        return none;
+    }
+    // The grid's largest term on the cell must be centred within 1/√a of
+    // it: the boundary integrals of the separated sum then are as large as
+    // what they add up to. For a cell that sees only the far tails of a
+    // grid they would cancel to a small difference.
+    let top = on
+        .iter()
+        .max_by(|x, y| kept[x.0].bound.total_cmp(&kept[y.0].bound));
+    if top.is_none_or(|&(k, _)| kept[k].far) {
+        return none;
+    }
+    let (mut i0, mut i1, mut j0, mut j1) = (u32::MAX, 0, u32::MAX, 0);
+    for &(_, (i, j)) in &on {
+        (i0, i1, j0, j1) = (i0.min(i), i1.max(i), j0.min(j), j1.max(j));
+    }
+    let (nx, ny) = ((i1 - i0 + 1) as usize, (j1 - j0 + 1) as usize);
+    // Cost in exponentials: a piece's twelve nodes each need n_x erfc (about
+    // three exponentials) and n_x + n_y exponentials, and n_x n_y products
+    // (about a quarter each); one by one, each term takes about four pieces
+    // of every edge.
+    let edges: usize = rings.iter().map(|r| r.len()).sum();
+    let together = pieces(rings, grid.a) * (4 * nx + ny + nx * ny / 4) as f64;
+    let alone = (on.len() * edges * 4) as f64;
+    if together >= alone {
+        return none;
+    }
+    let (mut c, mut bounds) = (vec![0.0; nx * ny], vec![f64::NEG_INFINITY; nx * ny]);
+    for &(k, (i, j)) in &on {
+        let at = (j - j0) as usize * nx + (i - i0) as usize;
+        c[at] = kept[k].term.log_weight.exp();
+        bounds[at] = kept[k].bound;
+    }
+    let window = Window {
+        a: grid.a,
+        xs: &grid.xs[i0 as usize..=i1 as usize],
+        ys: &grid.ys[j0 as usize..=j1 as usize],
+        c: &c,
+        bounds: &bounds,
+    };
+    // The pieces that cost as much as the terms one by one.
+    let budget = (alone / (4 * nx + ny + nx * ny / 4) as f64) as usize;
+    let Some(v) = grid_integrals(rings, &window, budget) else {
+        return none;
+    };
+    kept.retain(|t| grid.at[t.index].is_none());
+    v
+}
+
+/// The terms that matter over the cell ([`Kept`]), s, the largest log
+/// bound, and the log lower bound of the scaled integrand on the cell.
+fn kept_terms(rings: &[&Vec<Point>], terms: &[Gaussian], tol: Tolerance) -> (Vec<Kept>, f64, f64) {
     // Where every term's centre lies, and its log bounds over the cell.
     let places: Vec<RingDistances> = terms
         .iter()
@@ -208,21 +365,24 @@ fn kept_terms(
         .collect();
     let s = bounds.iter().map(|b| b.0).fold(f64::NEG_INFINITY, f64::max);
     let floor = bounds.iter().map(|b| b.1).fold(f64::NEG_INFINITY, f64::max);
-    let cut = floor + (1e-3 * tol.relative / terms.len() as f64).ln();
+    let cut = floor + (5e-4 * tol.relative / terms.len() as f64).ln();
     let kept = terms
         .iter()
         .zip(&bounds)
         .zip(&places)
-        .filter(|((_, b), _)| b.0 >= cut)
-        .map(|((t, _), at)| {
-            let g = Gaussian {
+        .enumerate()
+        .filter(|(_, ((_, b), _))| b.0 >= cut)
+        .map(|(index, ((t, b), at))| Kept {
+            term: Gaussian {
                 log_weight: t.log_weight - s,
                 ..*t
-            };
-            (g, !at.inside && t.a * at.boundary2 >= 1.0)
+            },
+            far: !at.inside && t.a * at.boundary2 >= 1.0,
+            index,
+            bound: b.0 - s,
         })
         .collect();
-    (kept, s)
+    (kept, s, floor - s)
 }
 
 /// Signed fans: Σ_i ±(r₀, r_i, r_{i+1}) is exactly the ring's interior
