@@ -40,6 +40,7 @@
 //! fade = 30.0          # the optimism's time constant [mission s]
 //! refit = 5.0          # mission seconds between fits
 //! lattice = 10.0       # spacing and spread of the belief's Gaussians [m]
+//! weight_sd = 5.0      # the prior's spread of each Gaussian's weight
 //! ```
 
 use std::path::{Path, PathBuf};
@@ -79,6 +80,7 @@ pub struct LearningSection {
     pub fade: Option<f64>,
     pub refit: Option<f64>,
     pub lattice: Option<f64>,
+    pub weight_sd: Option<f64>,
 }
 
 /// The safety filter, each key defaulting to
@@ -303,17 +305,10 @@ fn learning(
         fade: l.fade.unwrap_or(d.fade),
         refit: l.refit.unwrap_or(d.refit),
         lattice: l.lattice.unwrap_or(d.lattice),
+        weight_sd: l.weight_sd.unwrap_or(d.weight_sd),
     };
-    let invalid = |m: &str| Err(ApiError::Invalid(m.into()));
-    if !(0.0..=10.0).contains(&s.kappa) {
-        return invalid("learning.kappa: must be in [0, 10]");
-    }
-    if !(s.fade > 0.0 && s.fade <= 1e6) {
-        return invalid("learning.fade: must be in (0, 1e6] s");
-    }
-    if !(0.1..=3600.0).contains(&s.refit) {
-        return invalid("learning.refit: must be in [0.1, 3600] s");
-    }
+    s.validate(|f| format!("learning.{f}"))
+        .map_err(|e| ApiError::Invalid(e.to_string()))?;
     let (min, max) = mission.region().bounds();
     match crate::learning::Lattice::over(min, max, s.lattice) {
         Ok(_) => {}
@@ -416,6 +411,7 @@ mod tests {
             ("[learning]\nfade = 0", "learning.fade"),
             ("[learning]\nrefit = 0", "learning.refit"),
             ("[learning]\nlattice = 0.5", "learning.lattice"),
+            ("[learning]\nweight_sd = 0", "learning.weight_sd"),
             ("[learning]\nspread = 5", "spread"),
             ("[safety]\nsafety_distance = -1", "safety.safety_distance"),
             ("[safety]\nbraking = 1", "braking"),

@@ -13,7 +13,7 @@ use rand_chacha::ChaCha8Rng;
 use crate::coverage::{Fleet, InputError, RiskField, grid_lloyd};
 use crate::geometry::{Point, Region};
 use crate::learning::{
-    Adaptive, FADE, Gains, GridMap, Lattice, LearnSettings, Learner, Params, Quadrature, Sample,
+    Adaptive, FADE, Gains, GridMap, Lattice, LearnSettings, Learner, Quadrature, Sample, WEIGHT_SD,
 };
 
 /// How the simulated fleet measures and learns the field.
@@ -32,6 +32,8 @@ pub struct LearningConfig {
     pub refit: f64,
     /// The lattice's spacing (and each Gaussian's spread) [m].
     pub spacing: f64,
+    /// The prior's spread of each lattice weight (`LearnSettings::weight_sd`).
+    pub weight_sd: f64,
     /// Optimism κ: posterior standard deviations added (0: the mean) at
     /// first.
     pub kappa: f64,
@@ -105,8 +107,8 @@ enum Estimator {
 
 impl LearningConfig {
     /// The defaults of docs/learning.md: 1 Hz, σ 5 % of the range, no
-    /// outliers, a fit every 5 s, a 10 m lattice, the mean (an optimism
-    /// fading over [`FADE`] when set).
+    /// outliers, a fit every 5 s, a 10 m lattice of weights of spread
+    /// [`WEIGHT_SD`], the mean (an optimism fading over [`FADE`] when set).
     pub fn new(truth: RiskField) -> Self {
         LearningConfig {
             truth,
@@ -115,6 +117,7 @@ impl LearningConfig {
             outliers: 0.0,
             refit: 5.0,
             spacing: 10.0,
+            weight_sd: WEIGHT_SD,
             kappa: 0.0,
             fade: FADE,
             cover: Cover::Learned,
@@ -125,16 +128,11 @@ impl LearningConfig {
 
 impl LearningConfig {
     /// Checks every setting's range; errors name the `seacover sim` flag.
-    pub fn validate(&self) -> Result<(), &'static str> {
-        let check = |ok: bool, what: &'static str| if ok { Ok(()) } else { Err(what) };
-        check(
-            (0.0..=10.0).contains(&self.kappa),
-            "--kappa must be in [0, 10]",
-        )?;
-        check(
-            self.fade > 0.0 && self.fade <= 1e6,
-            "--fade must be in (0, 1e6] s",
-        )?;
+    pub fn validate(&self) -> Result<(), String> {
+        self.settings()
+            .validate(|f| format!("--{}", f.replace('_', "-")))
+            .map_err(|e| e.to_string())?;
+        let check = |ok: bool, what: &str| if ok { Ok(()) } else { Err(what.to_string()) };
         check(
             self.noise > 0.0 && self.noise <= 1.0,
             "--noise must be in (0, 1]",
@@ -146,15 +144,18 @@ impl LearningConfig {
         check(
             self.rate > 0.0 && self.rate <= 10.0,
             "--sample-rate must be in (0, 10] Hz",
-        )?;
-        check(
-            (0.1..=3600.0).contains(&self.refit),
-            "--refit must be in [0.1, 3600] s",
-        )?;
-        check(
-            self.spacing.is_finite() && self.spacing > 0.0,
-            "--lattice must be a length > 0 m",
         )
+    }
+
+    /// The learner's settings as a coordinator's would be.
+    pub(crate) fn settings(&self) -> LearnSettings {
+        LearnSettings {
+            kappa: self.kappa,
+            fade: self.fade,
+            refit: self.refit,
+            lattice: self.spacing,
+            weight_sd: self.weight_sd,
+        }
     }
 }
 
@@ -198,9 +199,11 @@ impl Learning {
             _ => prior.clone(),
         };
         let estimator = match config.cover {
-            Cover::Learned => {
-                Estimator::Bayes(Learner::new(lattice, prior.clone(), Params::default()))
-            }
+            Cover::Learned => Estimator::Bayes(Learner::new(
+                lattice,
+                prior.clone(),
+                config.settings().params(),
+            )),
             Cover::Schwager => {
                 let (adaptation, data, a_min) = SCHWAGER;
                 let gains = Gains::new(adaptation, data, a_min)?;
@@ -229,13 +232,7 @@ impl Learning {
 
     /// The learner's settings as a coordinator's would be.
     fn settings(&self) -> LearnSettings {
-        let c = &self.config;
-        LearnSettings {
-            kappa: c.kappa,
-            fade: c.fade,
-            refit: c.refit,
-            lattice: c.spacing,
-        }
+        self.config.settings()
     }
 
     /// The truth (what H_true is judged on).

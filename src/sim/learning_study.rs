@@ -13,6 +13,7 @@ use serde::Serialize;
 
 use super::learn::Cover;
 use super::{Config, Run, SimError, load_scenario, run};
+use crate::learning::LearnSettings;
 
 /// One way of covering, for one seed.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -35,26 +36,29 @@ pub struct LearningStudy {
 }
 
 /// Runs the study of `scenario` (which must have a truth) for `seeds`,
-/// `duration` seconds each, the optimistic fleet at `kappa`.
+/// `duration` seconds each, the optimistic fleet at `settings.kappa`
+/// fading over `settings.fade` seconds; both learning fleets with the
+/// prior's `settings.weight_sd`.
 pub fn run_learning_study(
     scenario: &str,
     seeds: &[u64],
     duration: f64,
-    kappa: f64,
+    settings: &LearnSettings,
 ) -> Result<LearningStudy, SimError> {
+    let (kappa, fade) = (settings.kappa, settings.fade);
     let (loaded, headings) = load_scenario(scenario)?;
     let base = Config::new(loaded, headings, duration);
-    let Some(learning) = &base.learning else {
+    if base.learning.is_none() {
         return Err(SimError::Io(format!(
             "{scenario} has no truth: the learning study needs one (docs/learning.md)"
         )));
-    };
+    }
     let ways = [
         ("clairvoyant".to_string(), Cover::Truth, 0.0),
         ("no learning".to_string(), Cover::Prior, 0.0),
         ("learning (mean)".to_string(), Cover::Learned, 0.0),
         (
-            format!("learning (κ = {kappa}, fade {} s)", learning.fade),
+            format!("learning (κ = {kappa}, fade {fade} s)"),
             Cover::Learned,
             kappa,
         ),
@@ -70,7 +74,8 @@ pub fn run_learning_study(
             config.seed = seed;
             config.snapshots.clear();
             if let Some(l) = &mut config.learning {
-                (l.cover, l.kappa) = (*cover, *k);
+                (l.cover, l.kappa, l.fade) = (*cover, *k, fade);
+                l.weight_sd = settings.weight_sd;
             }
             runs.push((name.clone(), run(&config, |_| {})?));
         }

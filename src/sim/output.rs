@@ -230,6 +230,8 @@ pub struct LearningSummary {
     pub sample_rate_hz: f64,
     pub refit_s: f64,
     pub lattice_m: f64,
+    /// The prior's spread of each lattice weight.
+    pub weight_sd: f64,
     pub samples: usize,
     pub fits: usize,
     #[serde(rename = "H_true_end")]
@@ -270,6 +272,7 @@ impl LearningSummary {
             outliers: l.outliers,
             sample_rate_hz: l.rate,
             refit_s: l.refit,
+            weight_sd: l.weight_sd,
             lattice_m: l.spacing,
             samples: learned.samples,
             fits: learned.fits,

@@ -339,3 +339,43 @@ fn the_comparison_with_schwager_and_grid_lloyd_is_what_the_study_prints() {
     );
     assert!(page_text.contains(&said), "the page does not say {said:?}");
 }
+
+/// The learner with the prior's weights held tighter (`--weight-sd 2`):
+/// seeds 1–5 end and reach 99 % as the page's row says, and sooner than
+/// the page's Schwager row on four seeds of five.
+#[test]
+fn a_tighter_prior_reaches_99_percent_sooner_than_schwager() {
+    let page = std::fs::read_to_string(PAGE).unwrap();
+    let row = page
+        .lines()
+        .map(str::trim_start)
+        .find(|l| l.starts_with("| learning (mean), `weight_sd` 2 |"))
+        .expect("the page has the weight_sd 2 row");
+    let cells: Vec<Vec<&str>> = row
+        .trim_matches('|')
+        .split('|')
+        .skip(1)
+        .map(|c| c.trim().trim_end_matches(" %").split(", ").collect())
+        .collect();
+    let schwager = comparison()
+        .into_iter()
+        .find(|r| r.0 == "schwager")
+        .expect("a schwager row")
+        .1;
+    let mut sooner = 0;
+    for seed in 1..=5 {
+        let n = seed.to_string();
+        let l = learn(SCENARIO, &["--seed", &n, "--weight-sd", "2"]);
+        let share = format!("{:.2}", 100.0 * l["share_end"].as_f64().unwrap());
+        let t99 = l["t_99"].as_f64().expect("reaches 99 %");
+        assert_eq!(share, cells[0][seed - 1], "seed {seed}");
+        assert_eq!(format!("{t99:.1} s"), cells[2][seed - 1], "seed {seed}");
+        if seconds(&schwager[2][seed - 1]).is_none_or(|s| t99 < s) {
+            sooner += 1;
+        }
+    }
+    assert_eq!(
+        sooner, 4,
+        "sooner than Schwager's law on four seeds of five"
+    );
+}

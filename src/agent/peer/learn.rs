@@ -29,7 +29,7 @@ use super::samples::{self, Book, Offered};
 use super::wire::{Keys, Refusal};
 use crate::coverage::RiskField;
 pub use crate::learning::LearnSettings;
-use crate::learning::{Lattice, Learner, Params};
+use crate::learning::{Lattice, Learner};
 use crate::protocol::peer::{PeerLearningDocument, PeerSampleDocument};
 
 /// A belief fitted by this member.
@@ -284,7 +284,7 @@ async fn fit_when_due(
         let fit = tokio::task::spawn_blocking(move || {
             let (min, max) = rev.mission.region().bounds();
             let lattice = Lattice::over(min, max, settings.lattice).ok()?;
-            let mut learner = Learner::new(lattice, rev.mission.risk().clone(), Params::default());
+            let mut learner = Learner::new(lattice, rev.mission.risk().clone(), settings.params());
             let fitted = samples.len();
             for s in samples {
                 learner.add(s);

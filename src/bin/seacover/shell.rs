@@ -205,6 +205,14 @@ pub(crate) struct PeerLearnArgs {
     /// Spacing of the belief's lattice of Gaussians (and their spread) [m].
     #[arg(long, value_name = "M", default_value_t = 10.0, requires = "learn")]
     lattice: f64,
+    /// The prior's spread of each lattice weight (the density's units).
+    #[arg(
+        long,
+        value_name = "SD",
+        default_value_t = seacover::learning::WEIGHT_SD,
+        requires = "learn"
+    )]
+    weight_sd: f64,
     /// The simulated vessels measure this scenario's `truth` (the world's,
     /// never given to the fleet) and share their samples.
     #[arg(long, value_name = "FILE", requires = "learn")]
@@ -226,28 +234,15 @@ impl PeerLearnArgs {
         if !self.learn {
             return Ok(());
         }
-        anyhow::ensure!(
-            (0.0..=10.0).contains(&self.kappa),
-            "--kappa must be in [0, 10]"
-        );
-        anyhow::ensure!(
-            self.fade > 0.0 && self.fade <= 1e6,
-            "--fade must be in (0, 1e6] s"
-        );
-        anyhow::ensure!(
-            (0.1..=3600.0).contains(&self.refit),
-            "--refit must be in [0.1, 3600] s"
-        );
-        anyhow::ensure!(
-            self.lattice.is_finite() && self.lattice > 0.0,
-            "--lattice must be a length > 0 m"
-        );
-        config.learning = Some(seacover::agent::peer::learn::LearnSettings {
+        let settings = seacover::agent::peer::learn::LearnSettings {
             kappa: self.kappa,
             fade: self.fade,
             refit: self.refit,
             lattice: self.lattice,
-        });
+            weight_sd: self.weight_sd,
+        };
+        settings.validate(|f| format!("--{}", f.replace('_', "-")))?;
+        config.learning = Some(settings);
         if let Some(path) = &self.truth {
             let text = std::fs::read_to_string(path)
                 .map_err(|e| anyhow::anyhow!("--truth {}: {e}", path.display()))?;

@@ -62,6 +62,7 @@ struct Bucket {
 struct Job {
     lattice: Lattice,
     prior: RiskField,
+    params: Params,
     samples: Vec<Sample>,
     kappa: f64,
     at: f64,
@@ -93,7 +94,7 @@ impl Worker {
             .name("seacover-learner".into())
             .spawn(move || {
                 while let Ok(job) = inbox.recv() {
-                    let mut learner = Learner::new(job.lattice, job.prior, Params::default());
+                    let mut learner = Learner::new(job.lattice, job.prior, job.params);
                     for s in job.samples {
                         learner.add(s);
                     }
@@ -340,6 +341,7 @@ impl Learning {
         let job = Job {
             lattice,
             prior: mission.risk().clone(),
+            params: self.settings.params(),
             samples: self.window.iter().map(|w| w.1).collect(),
             kappa: self.settings.kappa_at(now - oldest),
             at: now,

@@ -39,13 +39,13 @@ pub struct Params {
 }
 
 impl Default for Params {
-    /// The spreads every measurement in docs/learning.md uses: 1 for the
-    /// base and for the prior's scale, 5 for each lattice weight.
+    /// 1 for the base and for the prior's scale, [`WEIGHT_SD`](super::WEIGHT_SD)
+    /// for each lattice weight.
     fn default() -> Self {
         Params {
             base_sd: 1.0,
             prior_scale_sd: 1.0,
-            weight_sd: 5.0,
+            weight_sd: super::WEIGHT_SD,
         }
     }
 }

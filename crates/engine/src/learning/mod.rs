@@ -73,6 +73,10 @@ pub struct LearnSettings {
     pub refit: f64,
     /// The lattice's spacing and each Gaussian's spread [m].
     pub lattice: f64,
+    /// The prior's spread of each lattice weight ([`Params::weight_sd`]):
+    /// smaller keeps the first fits of a few samples from putting weight
+    /// where no sample has been, and shrinks the optimism's reach.
+    pub weight_sd: f64,
 }
 
 /// The optimism's time constant unless set [mission s]: about half the
@@ -80,15 +84,20 @@ pub struct LearnSettings {
 /// (docs/learning.md, "Optimism that fades").
 pub const FADE: f64 = 30.0;
 
+/// The prior's spread of each lattice weight unless set (the density's
+/// units; docs/learning.md, "The model").
+pub const WEIGHT_SD: f64 = 5.0;
+
 impl Default for LearnSettings {
     /// The mean (optimism fading over [`FADE`] when set), a fit every 5
-    /// mission seconds, a 10 m lattice.
+    /// mission seconds, a 10 m lattice, weights of spread [`WEIGHT_SD`].
     fn default() -> Self {
         LearnSettings {
             kappa: 0.0,
             fade: FADE,
             refit: 5.0,
             lattice: 10.0,
+            weight_sd: WEIGHT_SD,
         }
     }
 }
@@ -116,6 +125,62 @@ impl LearnSettings {
             return 0.0;
         }
         self.kappa * (-age / self.fade.max(f64::MIN_POSITIVE)).exp()
+    }
+
+    /// Checks every setting's range, wherever the settings were read:
+    /// `name` turns a setting's name (`kappa`, `fade`, `refit`, `lattice`)
+    /// into what the reader calls it (`--kappa`, `learning.kappa`; the
+    /// spread is `weight_sd`). The
+    /// lattice's fit to the region is [`Lattice::over`]'s to check.
+    ///
+    /// ```
+    /// use seacover_engine::learning::LearnSettings;
+    /// let s = LearnSettings { fade: 0.0, ..LearnSettings::default() };
+    /// let e = s.validate(|f| format!("--{f}")).unwrap_err();
+    /// assert_eq!(e.to_string(), "--fade: must be in (0, 1e6] s");
+    /// ```
+    pub fn validate(&self, name: impl Fn(&str) -> String) -> Result<(), InputError> {
+        let check = |field: &str, ok: bool, reason: &str| {
+            if ok {
+                Ok(())
+            } else {
+                Err(InputError::invalid(name(field), reason))
+            }
+        };
+        check(
+            "kappa",
+            (0.0..=10.0).contains(&self.kappa),
+            "must be in [0, 10]",
+        )?;
+        check(
+            "fade",
+            self.fade > 0.0 && self.fade <= 1e6,
+            "must be in (0, 1e6] s",
+        )?;
+        check(
+            "refit",
+            (0.1..=3600.0).contains(&self.refit),
+            "must be in [0.1, 3600] s",
+        )?;
+        check(
+            "lattice",
+            self.lattice.is_finite() && self.lattice > 0.0,
+            "must be a length > 0 m",
+        )?;
+        check(
+            "weight_sd",
+            self.weight_sd > 0.0 && self.weight_sd <= MAX_DENSITY,
+            "must be in (0, 1e12]",
+        )
+    }
+
+    /// The fit's prior spreads: [`Params::default`] with these settings'
+    /// `weight_sd`.
+    pub fn params(&self) -> Params {
+        Params {
+            weight_sd: self.weight_sd,
+            ..Params::default()
+        }
     }
 }
 

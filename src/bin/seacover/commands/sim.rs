@@ -103,6 +103,9 @@ struct Learning {
     /// Spacing of the belief's lattice of Gaussians (and their spread).
     #[arg(long, value_name = "M", default_value_t = 10.0)]
     lattice: f64,
+    /// The prior's spread of each lattice weight (the density's units).
+    #[arg(long, value_name = "SD", default_value_t = seacover::learning::WEIGHT_SD)]
+    weight_sd: f64,
 }
 
 impl Learning {
@@ -118,6 +121,7 @@ impl Learning {
         (l.kappa, l.fade) = (self.kappa, self.fade);
         (l.noise, l.outliers) = (self.noise, self.outliers);
         (l.rate, l.refit, l.spacing) = (self.sample_rate, self.refit, self.lattice);
+        l.weight_sd = self.weight_sd;
         l.validate().map_err(anyhow::Error::msg)
     }
 }
@@ -170,6 +174,13 @@ enum Study {
         /// The optimistic fleet's κ.
         #[arg(long, value_name = "K", default_value_t = 1.0)]
         kappa: f64,
+        /// The optimism's time constant: κ fades as κ·exp(−t / SECONDS).
+        #[arg(long, value_name = "SECONDS", default_value_t = seacover::learning::FADE)]
+        fade: f64,
+        /// The prior's spread of each lattice weight, for both learning
+        /// fleets.
+        #[arg(long, value_name = "SD", default_value_t = seacover::learning::WEIGHT_SD)]
+        weight_sd: f64,
         /// Where to write the table, the JSON and the figure.
         #[arg(long, value_name = "DIR", default_value = "learning-study")]
         out: PathBuf,
@@ -233,10 +244,12 @@ pub(crate) fn run(args: Args) -> ExitCode {
             seeds,
             duration,
             kappa,
+            fade,
+            weight_sd,
             ref out,
         }) => (
             "sim learning-study",
-            learning_study(scenario, seeds, duration, kappa, out),
+            learning_study(scenario, seeds, duration, (kappa, fade, weight_sd), out),
         ),
         None => ("sim", simulate(&args)),
     };
@@ -411,7 +424,7 @@ fn learning_study(
     scenario: &str,
     seeds: u64,
     duration: f64,
-    kappa: f64,
+    (kappa, fade, weight_sd): (f64, f64, f64),
     out: &Path,
 ) -> anyhow::Result<()> {
     ensure!((1..=100).contains(&seeds), "--seeds must be in [1, 100]");
@@ -419,11 +432,18 @@ fn learning_study(
         duration.is_finite() && duration > 0.0 && duration <= 86_400.0,
         "--duration must be in (0, 86400] s"
     );
-    ensure!((0.0..=10.0).contains(&kappa), "--kappa must be in [0, 10]");
+    let optimism = seacover::learning::LearnSettings {
+        kappa,
+        fade,
+        weight_sd,
+        ..Default::default()
+    };
+    optimism.validate(|f| format!("--{}", f.replace('_', "-")))?;
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let seed_list: Vec<u64> = (1..=seeds).collect();
-    let study =
-        seacover::sim::learning_study::run_learning_study(scenario, &seed_list, duration, kappa)?;
+    let study = seacover::sim::learning_study::run_learning_study(
+        scenario, &seed_list, duration, &optimism,
+    )?;
     let table = seacover::sim::learning_study::table(&study, duration);
     std::fs::write(out.join("table.md"), &table)?;
     std::fs::write(
