@@ -128,10 +128,10 @@ impl LearnSettings {
     }
 
     /// Checks every setting's range, wherever the settings were read:
-    /// `name` turns a setting's name (`kappa`, `fade`, `refit`, `lattice`)
-    /// into what the reader calls it (`--kappa`, `learning.kappa`; the
-    /// spread is `weight_sd`). The
-    /// lattice's fit to the region is [`Lattice::over`]'s to check.
+    /// `name` turns a setting's name (`kappa`, `fade`, `refit`, `lattice`,
+    /// `weight_sd`) into what the reader calls it (`--kappa`,
+    /// `learning.kappa`). The lattice's fit to the region is
+    /// [`Lattice::over`]'s to check.
     ///
     /// ```
     /// use seacover_engine::learning::LearnSettings;
