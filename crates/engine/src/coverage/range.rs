@@ -6,24 +6,33 @@
 //! A vessel's actuator reaches r_i = √(ln(1/ε) / β_i), ε = [`NEGLIGIBLE`]:
 //! beyond it f_i(q)/k_i = exp(−β_i ‖q − p_i‖²) < ε, so the vessel neither
 //! covers anything there nor is needed there. Its range-limited cell is its
-//! generalized Voronoi cell among itself and the vessels j within
-//! r_i + r_j of it ([`relevant`]; 2r in a fleet of one actuator), and
+//! generalized Voronoi cell among itself and the vessels j within the
+//! [`interaction_distance`] of it ([`relevant`]; 2r in a fleet of one
+//! actuator), and
 //! [`local_cell`] evaluates it with the same engine as the centralized
 //! [`evaluate`](super::evaluate()).
 //!
-//! ## Equality with the centralized cell (one k and one β)
-//! Let q be in the disc D_i = {‖q − p_i‖ ≤ r_i} and j a vessel with
-//! ‖p_j − p_i‖ > 2r. Then ‖q − p_j‖ ≥ ‖p_j − p_i‖ − ‖q − p_i‖ > r ≥
-//! ‖q − p_i‖, so f_i(q) > f_j(q): j takes nothing of D_i from i. Hence
-//! V_i(local) ∩ D_i = V_i(all) ∩ D_i: the two cells are the same set on the
-//! disc, and outside it they can differ only where f_i < ε k_i, so the
-//! mass M_i = ∫ f_i Φ and the f_i Φ-weighted centroid differ by less than
-//! ε k_i Φ_max |Q| (`tests/it/engine.rs` and the tests below check both,
-//! and that with every vessel within range the cells are the centralized
-//! ones bit for bit). With unequal k a stronger actuator may own water
-//! beyond the weaker one's reach, and the radius grows to
-//! √(ln(k_max/(ε k_i)) / β) for that vessel: [`relevant`] uses it.
+//! ## Equality with the centralized cell
+//! One k and one β first. Let q be in the disc D_i = {‖q − p_i‖ ≤ r_i}
+//! and j a vessel with ‖p_j − p_i‖ > 2r. Then ‖q − p_j‖ ≥ ‖p_j − p_i‖ −
+//! ‖q − p_i‖ > r ≥ ‖q − p_i‖, so f_i(q) > f_j(q): j takes nothing of D_i
+//! from i. Hence V_i(local) ∩ D_i = V_i(all) ∩ D_i: the two cells are the
+//! same set on the disc, and outside it they can differ only where f_i <
+//! ε k_i, so the mass M_i = ∫ f_i Φ and the f_i Φ-weighted centroid differ
+//! by less than ε k_i Φ_max |Q| (`tests/it/engine.rs` and the tests below
+//! check both, and that with every vessel within range the cells are the
+//! centralized ones bit for bit).
 //!
+//! Any k and β (the generalized cells of eq. 6, curved where β differs):
+//! on D_i, f_i ≥ ε k_i. Let ρ(j, i) = √(ln(max(k_j/k_i, 1)/ε)/β_j): beyond
+//! it from p_j, f_j < ε k_i. If ‖p_j − p_i‖ > r_i + ρ(j, i), every q in D_i
+//! is farther than ρ(j, i) from p_j, so f_j(q) < ε k_i ≤ f_i(q), and the
+//! argument above holds as it stands. [`interaction_distance`] is the
+//! larger of r_i + ρ(j, i) and r_j + ρ(i, j), so that i and j agree;
+//! with one actuator it is 2r. (An earlier form summed both radii each
+//! widened by the other's gain, which falls short when the stronger vessel
+//! is also the wider: a test below.)
+
 //! ## Cost
 //! Selecting neighbours is one distance test per vessel heard; the cell
 //! is then [`cell`] (the power diagram's when β is common): the relevant vessels (~140 at the paper's
@@ -47,15 +56,20 @@ pub fn reach(beta: f64) -> f64 {
     ((1.0 / NEGLIGIBLE).ln() / beta).sqrt()
 }
 
-/// How far from `own` a vessel of gain `k` and decay `beta` can still
-/// share a cell boundary inside `own`'s reach: r_own + r_other, each
-/// radius widened by the gain ratio when the other is the stronger.
+/// How far from `own` `other` can still take water within `own`'s reach,
+/// or `own` within `other`'s (see the module doc): the larger of
+/// r_own + ρ(other, own) and r_other + ρ(own, other). Symmetric, so two
+/// vessels agree on whether they matter to each other.
 pub fn interaction_distance(own: &Vessel, other: &Vessel) -> f64 {
-    let widen = |v: &Vessel, stronger: f64| {
-        let ratio = (stronger / v.k).max(1.0);
-        (((1.0 / NEGLIGIBLE) * ratio).ln() / v.beta).sqrt()
-    };
-    widen(own, other.k) + widen(other, own.k)
+    let one_way = |a: &Vessel, b: &Vessel| reach(a.beta) + outreach(b, a);
+    one_way(own, other).max(one_way(other, own))
+}
+
+/// ρ(v, w): beyond it v's actuator is below ε k_w, what w's own is at
+/// w's reach: √(ln(max(k_v / k_w, 1) / ε) / β_v).
+fn outreach(v: &Vessel, w: &Vessel) -> f64 {
+    let ratio = (v.k / w.k).max(1.0);
+    ((ratio / NEGLIGIBLE).ln() / v.beta).sqrt()
 }
 
 /// Whether `other` can matter to `own`'s range-limited cell.
@@ -149,6 +163,43 @@ mod tests {
             let local = local_cell(&region, &risk, *own, others, &Options::default()).unwrap();
             assert_eq!(local.mass, all.cells[i].mass, "vessel {i}");
             assert_eq!(local.centroid, all.cells[i].centroid, "vessel {i}");
+        }
+    }
+
+    /// A weaker, narrower vessel and a stronger, wider one just beyond
+    /// what each needs of the other: on the weaker one's disc of reach
+    /// the stronger still wins nothing, so leaving it out changes nothing
+    /// there. On the boundary point toward it (the likeliest to be lost)
+    /// and just outside the interaction distance.
+    #[test]
+    fn a_stronger_wider_vessel_beyond_the_interaction_distance_takes_nothing_within_reach() {
+        for (weak, strong) in [((0.5, 0.004), (1.0, 0.001)), ((0.2, 0.01), (2.0, 0.0005))] {
+            let own = Vessel {
+                position: Point { x: 0.0, y: 0.0 },
+                k: weak.0,
+                beta: weak.1,
+            };
+            let mut other = Vessel {
+                position: Point { x: 0.0, y: 0.0 },
+                k: strong.0,
+                beta: strong.1,
+            };
+            let d = interaction_distance(&own, &other) * (1.0 + 1e-9);
+            other.position.x = d;
+            assert!(!relevant(&own, &other));
+            assert_eq!(
+                interaction_distance(&other, &own),
+                interaction_distance(&own, &other)
+            );
+            // Where own's actuator falls to ε, toward the other.
+            let r = reach(own.beta);
+            let f = |v: &Vessel, x: f64| v.k * (-v.beta * (x - v.position.x).powi(2)).exp();
+            assert!(
+                f(&other, r) < f(&own, r),
+                "{weak:?} vs {strong:?}: at {r} m the other has {:e} against {:e}",
+                f(&other, r),
+                f(&own, r)
+            );
         }
     }
 
