@@ -272,6 +272,63 @@ fn an_agent_without_a_mode_names_both() {
     assert!(err.contains("--server") && err.contains("--peer"), "{err}");
 }
 
+/// Runs `args`, which must be refused at start: its exit status and
+/// standard error, or a panic if it is still running after 10 s (it took
+/// the flags and started).
+fn refused(args: &[&str]) -> (Option<i32>, String) {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_seacover"))
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("binary starts");
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(10);
+    while child.try_wait().unwrap().is_none() {
+        if std::time::Instant::now() > deadline {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("{args:?} was not refused: it started");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let out = child.wait_with_output().unwrap();
+    (
+        out.status.code(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// A peer's `--actuator` is checked as a scenario's vessel is, before
+/// anything joins a fleet; and the flags only a peer takes are refused
+/// beside `--server` rather than ignored (they were: `--mission`,
+/// `--alone`, `--learn`).
+#[test]
+fn peer_flags_are_checked_and_refused_without_peer() {
+    for (value, says) in [
+        ("0,0.001", "actuator.k"),
+        ("0.5,-1", "actuator.beta"),
+        ("0.5", "K,BETA"),
+        ("x,0.001", "K:"),
+    ] {
+        let (code, err) = refused(&["agent", "--peer", "--actuator", value]);
+        assert_eq!(code, Some(2), "{value}: {err}");
+        assert!(err.contains(says), "--actuator {value}: {err}");
+    }
+    let mission = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/paper.json");
+    for flags in [
+        &["--actuator", "0.5,0.004"][..],
+        &["--mission", mission],
+        &["--alone"],
+        &["--learn"],
+    ] {
+        let args = [&["agent", "--server", "http://127.0.0.1:1"][..], flags].concat();
+        let (code, err) = refused(&args);
+        assert_eq!(code, Some(2), "{flags:?}: {err}");
+        assert!(err.contains("--server"), "{flags:?}: {err}");
+    }
+}
+
 fn harbour() -> Value {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/harbour.json");
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()

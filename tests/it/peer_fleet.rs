@@ -23,6 +23,9 @@
 //!   coverage reached for each R against the centralized one.
 //! - g. The bandwidth each vessel uses at 5 Hz in real time, with samples
 //!   flowing (the fleet learning the risk map, every hull measuring at 1 Hz).
+//! - h. A mixed fleet (examples/paper-mixed.json, two actuators): each
+//!   vessel announces its own and the fleet reaches the same fleet's
+//!   centralized optimum, on the curved cells.
 //!
 //! Links: Zenoh's UDP unicast links, the peer default
 //! (`seacover::agent::peer::session::PEER_LISTEN`); d pins their port.
@@ -84,6 +87,82 @@ fn a_no_coordinator_eight_vessels_reach_the_centralized_optimum() {
         wall.elapsed().as_secs_f64(),
         100.0 * delivered,
         BEACON_HZ * WARP,
+    );
+    checks.check(e_max < 0.5, format!("E_max {e_max:.3} m < 0.5 m"));
+    checks.check(
+        (ratio - 1.0).abs() <= 0.005,
+        format!("H {h:.1} within 0.5 % of the centralized {h_central:.1} (ratio {ratio:.5})"),
+    );
+    checks.finish();
+}
+
+/// h. The mixed fleet of examples/paper-mixed.json, each vessel taking its
+/// own actuator from the scenario (usv-2, -4, -6 and -8 at β = 0.004, the
+/// others at 0.001): every beacon announces it (within the wire's 0.1 %),
+/// and after 200 s of mission time every vessel is within 0.5 m of its own
+/// cell's centroid (`seacover evaluate`'s generalized, curved cells of
+/// that fleet) and H is within 0.5 % of `seacover sim`'s centralized
+/// run of the same scenario.
+#[test]
+fn h_a_mixed_fleet_reaches_the_centralized_optimum() {
+    let test = "peer_fleet h";
+    let Some(python) = skip(test) else { return };
+    let mut checks = Checks::new(test);
+    let h_central = centralized_h_of(MIXED);
+    let mixed = scenario(MIXED);
+    let wall = Instant::now();
+    let mut setup = Setup::new("h", WARP);
+    setup.mission = MIXED;
+    let mut fleet = Fleet::new(setup, &python);
+    fleet.launch();
+    fleet.wait_heard_all();
+    fleet.run_until(200.0, |_| {});
+    let (h, e) = coverage_in(&mixed, &fleet.positions());
+    let e_max = max_of(&e);
+    let ratio = h / h_central;
+    let safety = fleet.safety_distance();
+    let closest = check_safety(&mut checks, &fleet, safety);
+    // What each vessel's beacons announce, against the scenario's.
+    let wrong: Vec<String> = mixed["vessels"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|v| {
+            let id = v["id"].as_str().unwrap();
+            let (k, beta) = (num(&v["k"], "k"), num(&v["beta"], "beta"));
+            fleet
+                .beacons
+                .iter()
+                .filter(move |r| r["beacon"]["id"] == id)
+                .filter_map(move |r| {
+                    let (bk, bb) = (
+                        num(&r["beacon"]["k"], "k"),
+                        num(&r["beacon"]["beta"], "beta"),
+                    );
+                    let off = |a: f64, b: f64| (a - b).abs() > 1e-3 * b;
+                    (off(bk, k) || off(bb, beta)).then(|| format!("{id}: k {bk}, β {bb}"))
+                })
+        })
+        .collect();
+    let betas: BTreeSet<String> = fleet
+        .latest
+        .values()
+        .map(|r| format!("{}", r["beacon"]["beta"]))
+        .collect();
+    fleet.shutdown(&mut checks);
+    eprintln!(
+        "SUMMARY {test}: 8 processes, paper-mixed, time warp {WARP}; announced β {betas:?}; after \
+         200 s of mission time ({:.0} s wall): H = {h:.1}, centralized H = {h_central:.1}, ratio \
+         {ratio:.5}; E_max = {e_max:.3} m ({e:.3?}); closest pair {closest:.2} m (safety {safety} m)",
+        wall.elapsed().as_secs_f64(),
+    );
+    checks.check(
+        wrong.is_empty(),
+        format!(
+            "every beacon announces its vessel's own actuator ({} do not, e.g. {:?})",
+            wrong.len(),
+            wrong.first()
+        ),
     );
     checks.check(e_max < 0.5, format!("E_max {e_max:.3} m < 0.5 m"));
     checks.check(

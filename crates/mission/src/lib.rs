@@ -162,14 +162,7 @@ impl Mission {
     pub fn from_document(doc: &MissionDocument) -> Result<Mission, MissionError> {
         let region = crate::scenario::region_from_document(&doc.region)?;
         let risk = risk_field(&doc.risk)?;
-        // The actuator is checked as a scenario's vessel would be.
-        Fleet::new(vec![Vessel {
-            position: Point { x: 0.0, y: 0.0 },
-            k: doc.actuator.k,
-            beta: doc.actuator.beta,
-        }])
-        .map_err(|e| MissionError::from(ScenarioError::from(e)))
-        .map_err(|e| MissionError::Invalid(format!("actuator: {e}")))?;
+        check_actuator(doc.actuator, "actuator")?;
         if !(doc.tick_hz.is_finite() && doc.tick_hz > 0.0 && doc.tick_hz <= 100.0) {
             return Err(MissionError::Invalid("tick_hz: must be in (0, 100]".into()));
         }
@@ -235,6 +228,32 @@ impl Mission {
         Mission::from_document(&doc)
     }
 
+    /// The actuator of each vessel a scenario document names: its own k
+    /// and β, or the defaults, each checked as a mission's actuator is
+    /// (`vessels[i]` in the message); empty for a mission document or a
+    /// scenario without vessels. A vessel of a peer fleet computes with
+    /// its own (docs/peer.md, "Every actuator on board").
+    pub fn vessel_actuators(
+        text: &str,
+    ) -> Result<std::collections::BTreeMap<String, ActuatorDocument>, MissionError> {
+        if serde_json::from_str::<MissionDocument>(text).is_ok() {
+            return Ok(Default::default());
+        }
+        let local = scenario::parse_document(text)?;
+        let mut out = std::collections::BTreeMap::new();
+        for (i, v) in local.vessels.iter().enumerate() {
+            let a = ActuatorDocument {
+                k: v.k.unwrap_or(seacover_engine::coverage::fleet::DEFAULT_K),
+                beta: v
+                    .beta
+                    .unwrap_or(seacover_engine::coverage::fleet::DEFAULT_BETA),
+            };
+            check_actuator(a, &format!("vessels[{i}]"))?;
+            out.insert(v.id.clone(), a);
+        }
+        Ok(out)
+    }
+
     pub fn document(&self) -> MissionDocument {
         MissionDocument {
             origin: self.origin,
@@ -260,5 +279,73 @@ impl Mission {
     pub fn frame(&self) -> Option<LocalFrame> {
         // Validated when it was set (`from_document`, `changed`).
         self.origin.and_then(|o| origin_frame(o).ok())
+    }
+}
+
+/// Checks an actuator as a scenario's vessel would be; `at` names it in
+/// the message.
+pub fn check_actuator(a: ActuatorDocument, at: &str) -> Result<(), MissionError> {
+    Fleet::new(vec![Vessel {
+        position: Point { x: 0.0, y: 0.0 },
+        k: a.k,
+        beta: a.beta,
+    }])
+    .map(|_| ())
+    .map_err(|e| match e {
+        // The engine names it as the first vessel of a fleet.
+        seacover_engine::coverage::InputError::Invalid { field, reason } => MissionError::from(
+            ScenarioError::from(seacover_engine::coverage::InputError::Invalid {
+                field: field.replacen("vessels[0]", at, 1),
+                reason,
+            }),
+        ),
+        e => MissionError::from(ScenarioError::from(e)),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_vessel_of_a_scenario_has_its_own_actuator() {
+        let text = r#"{"vessels": [
+            {"id": "a", "x": 1, "y": 2, "k": 0.7, "beta": 0.004},
+            {"id": "b", "x": 3, "y": 4}
+        ]}"#;
+        let a = Mission::vessel_actuators(text).unwrap();
+        assert_eq!(
+            a["a"],
+            ActuatorDocument {
+                k: 0.7,
+                beta: 0.004
+            }
+        );
+        let defaults = ActuatorDocument {
+            k: seacover_engine::coverage::fleet::DEFAULT_K,
+            beta: seacover_engine::coverage::fleet::DEFAULT_BETA,
+        };
+        assert_eq!(a["b"], defaults);
+        assert_eq!(a.len(), 2);
+    }
+
+    #[test]
+    fn a_mission_document_names_no_vessel() {
+        let text = serde_json::to_string(&Mission::paper().document()).unwrap();
+        assert!(Mission::vessel_actuators(&text).unwrap().is_empty());
+    }
+
+    #[test]
+    fn a_vessel_actuator_out_of_range_is_refused_by_its_place() {
+        let text = r#"{"vessels": [
+            {"id": "a", "x": 1, "y": 2},
+            {"id": "b", "x": 3, "y": 4, "beta": -1}
+        ]}"#;
+        let e = Mission::vessel_actuators(text).unwrap_err().to_string();
+        assert!(e.starts_with("vessels[1].beta: "), "{e}");
+        let mut doc = Mission::paper().document();
+        doc.actuator.k = 0.0;
+        let e = Mission::from_document(&doc).unwrap_err().to_string();
+        assert!(e.starts_with("actuator.k: "), "{e}");
     }
 }

@@ -37,6 +37,7 @@ pub mod step;
 pub mod table;
 pub mod wire;
 
+use crate::protocol::ActuatorDocument;
 use crate::protocol::peer::PeerMissionDocument;
 pub use error::PeerError;
 
@@ -65,6 +66,8 @@ pub struct PeerConfig {
     pub sensor: Option<crate::agent::sensor::SensorConfig>,
     /// Seeds the simulated sensors' noise.
     pub seed: u64,
+    /// Each vessel's own actuator.
+    pub actuators: OwnActuators,
 }
 
 impl PeerConfig {
@@ -83,35 +86,88 @@ impl PeerConfig {
             learning: None,
             sensor: None,
             seed: 1,
+            actuators: OwnActuators::default(),
         })
     }
 }
 
-/// The mission document in `path` (a mission as `GET /api/v1/mission`
-/// gives it, or a scenario document, whose region, risk and first
-/// vessel's actuator make the mission), as revision 0.
-pub fn mission_file(path: &std::path::Path) -> Result<PeerMissionDocument, PeerError> {
-    let text = std::fs::read_to_string(path).map_err(|source| PeerError::Read {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    let dir = path.parent().unwrap_or(std::path::Path::new("."));
-    let text = crate::raster::resolve(&text, dir).map_err(|source| PeerError::Raster {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    let mission =
-        crate::mission::Mission::from_text(&text).map_err(|source| PeerError::Mission {
+impl PeerConfig {
+    /// Takes revision 0 of the mission from `path` (a mission as `GET
+    /// /api/v1/mission` gives it, or a scenario document, whose region,
+    /// risk and first vessel's actuator make the mission) and, from a
+    /// scenario, each vessel's own actuator ([`OwnActuators`]).
+    pub fn load_mission(&mut self, path: &std::path::Path) -> Result<(), PeerError> {
+        let text = std::fs::read_to_string(path).map_err(|source| PeerError::Read {
             path: path.to_path_buf(),
             source,
         })?;
-    Ok(PeerMissionDocument {
-        revision: 0,
-        mission: mission.document(),
-        by: Some(wire::author(&format!(
-            "seacover agent --mission {}",
-            path.display()
-        ))),
-        at: Some(wire::now_utc()),
-    })
+        let dir = path.parent().unwrap_or(std::path::Path::new("."));
+        let text = crate::raster::resolve(&text, dir).map_err(|source| PeerError::Raster {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let refused = |source| PeerError::Mission {
+            path: path.to_path_buf(),
+            source,
+        };
+        let mission = crate::mission::Mission::from_text(&text).map_err(refused)?;
+        self.actuators.scenario =
+            crate::mission::Mission::vessel_actuators(&text).map_err(refused)?;
+        self.mission = Some(PeerMissionDocument {
+            revision: 0,
+            mission: mission.document(),
+            by: Some(wire::author(&format!(
+                "seacover agent --mission {}",
+                path.display()
+            ))),
+            at: Some(wire::now_utc()),
+        });
+        Ok(())
+    }
+}
+
+/// Which actuator each of this process's vessels computes its cell with
+/// and announces in its beacons: `given` (`--actuator`) for every one;
+/// else the vessel of the same id in the `--mission` scenario; else the
+/// mission's (its first vessel's).
+#[derive(Debug, Clone, Default)]
+pub struct OwnActuators {
+    pub given: Option<ActuatorDocument>,
+    pub scenario: std::collections::BTreeMap<String, ActuatorDocument>,
+}
+
+impl OwnActuators {
+    /// The actuator vessel `id` declares; `None`: the mission's.
+    pub fn of(&self, id: &str) -> Option<ActuatorDocument> {
+        self.given.or_else(|| self.scenario.get(id).copied())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_vessel_takes_its_own_actuator_from_the_scenario_unless_given_one() {
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/paper-mixed.json");
+        let mut config = PeerConfig::new("f".into(), session::ZenohOptions::default()).unwrap();
+        config.load_mission(&path).unwrap();
+        let wide = ActuatorDocument {
+            k: 0.5,
+            beta: 0.004,
+        };
+        let paper = ActuatorDocument {
+            k: 0.5,
+            beta: 0.001,
+        };
+        assert_eq!(config.actuators.of("usv-2"), Some(wide));
+        assert_eq!(config.actuators.of("usv-3"), Some(paper));
+        // Not in the scenario: the mission's, which is its first vessel's.
+        assert_eq!(config.actuators.of("mav-1"), None);
+        assert_eq!(config.mission.as_ref().unwrap().mission.actuator, paper);
+        config.actuators.given = Some(wide);
+        assert_eq!(config.actuators.of("usv-3"), Some(wide));
+        assert_eq!(config.actuators.of("mav-1"), Some(wide));
+    }
 }

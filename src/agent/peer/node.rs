@@ -22,7 +22,7 @@ use zenoh::query::ConsolidationMode;
 use super::board::{Board, Revision};
 use super::joining::Joining;
 use super::learn::{Learning, Outbox};
-use super::split::{Change, Split, Tick};
+use super::split::{Split, Tick};
 use super::table::Table;
 use super::wire::{self, Keys, utc_now};
 use super::{PeerConfig, PeerError};
@@ -346,6 +346,8 @@ pub async fn run(
 /// simulated hull and an autopilot's link share.
 struct Declared {
     id: String,
+    /// Its own actuator, when it declares one.
+    own_actuator: Option<crate::protocol::ActuatorDocument>,
     _token: zenoh::liveliness::LivelinessToken,
     publisher: zenoh::pubsub::Publisher<'static>,
     status: zenoh::query::Queryable<zenoh::handlers::FifoChannelHandler<zenoh::query::Query>>,
@@ -404,9 +406,18 @@ impl Declared {
         let guidance = current
             .as_ref()
             .map(|r| Guidance::new(r.mission.guidance()));
-        tracing::info!(vessel = %id, fleet = %keys.fleet, "peer vessel joined");
+        let own_actuator = member.shared.config.actuators.of(id);
+        match own_actuator {
+            Some(a) => {
+                tracing::info!(vessel = %id, fleet = %keys.fleet, k = a.k, beta = a.beta, "peer vessel joined")
+            }
+            None => {
+                tracing::info!(vessel = %id, fleet = %keys.fleet, "peer vessel joined with the mission's actuator")
+            }
+        }
         Ok(Declared {
             id: id.to_string(),
+            own_actuator,
             _token: token,
             publisher,
             status,
@@ -520,11 +531,15 @@ impl Declared {
         let _ = query.reply(shared.keys.status(&self.id), json).await;
     }
 
-    /// The actuator it announces and computes with: the mission's as the
-    /// wire carries it; before it has a mission, the paper's default.
+    /// The actuator it announces and computes with, as the wire carries
+    /// it: its own ([`OwnActuators`](super::OwnActuators)), else the
+    /// mission's; before it has either, the paper's default.
     fn actuator(&self) -> (f64, f64) {
-        match &self.current {
-            Some(r) => wire::wire_actuator(r.mission.actuator().k, r.mission.actuator().beta),
+        let a = self
+            .own_actuator
+            .or_else(|| self.current.as_ref().map(|r| r.mission.actuator()));
+        match a {
+            Some(a) => wire::wire_actuator(a.k, a.beta),
             None => wire::wire_actuator(
                 crate::coverage::fleet::DEFAULT_K,
                 crate::coverage::fleet::DEFAULT_BETA,
@@ -571,7 +586,7 @@ impl Declared {
             ageing,
             t,
         });
-        log_split(&self.id, t, &change);
+        change.log(&self.id, t);
         // The other group stays an obstacle where it fell silent too, not
         // only where the plan has it: two boats lost at once look like a
         // partition, and a wreck does not follow the plan.
@@ -695,27 +710,6 @@ async fn run_vessel(
     }
     tracing::info!(vessel = %vessel.id, "peer vessel left");
     Ok(())
-}
-
-/// What a vessel's log says of its split plan.
-fn log_split(id: &str, t: f64, change: &Change) {
-    match change {
-        Change::None => {}
-        Change::Started {
-            others,
-            closest,
-            duration,
-            water,
-        } => tracing::info!(
-            vessel = %id, t, ?others, closest, duration, ?water,
-            "fleet split: following the plan both groups compute"
-        ),
-        Change::Refused { others, closest } => tracing::warn!(
-            vessel = %id, t, ?others, closest,
-            "fleet split: the plan's way is not clear, keeping clear of the silent vessels instead"
-        ),
-        Change::Ended { why } => tracing::info!(vessel = %id, t, why, "fleet split: plan ended"),
-    }
 }
 
 fn status_document(

@@ -119,6 +119,31 @@ pub enum Change {
     },
 }
 
+impl Change {
+    /// What vessel `id`'s log says of its split plan at mission time `t`.
+    pub fn log(&self, id: &str, t: f64) {
+        match self {
+            Change::None => {}
+            Change::Started {
+                others,
+                closest,
+                duration,
+                water,
+            } => tracing::info!(
+                vessel = %id, t, ?others, closest, duration, ?water,
+                "fleet split: following the plan both groups compute"
+            ),
+            Change::Refused { others, closest } => tracing::warn!(
+                vessel = %id, t, ?others, closest,
+                "fleet split: the plan's way is not clear, keeping clear of the silent vessels instead"
+            ),
+            Change::Ended { why } => {
+                tracing::info!(vessel = %id, t, why, "fleet split: plan ended")
+            }
+        }
+    }
+}
+
 /// What a vessel's tick hands its split.
 #[derive(Debug, Clone, Copy)]
 pub struct Tick<'a> {

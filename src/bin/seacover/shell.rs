@@ -180,7 +180,7 @@ pub(crate) struct PeerLearnArgs {
     /// Learn the risk map from the fleet's samples and cover the belief
     /// (the mission's risk is the prior). Every member needs the same
     /// learning flags: the belief is fitted with them.
-    #[arg(long, requires = "peer")]
+    #[arg(long, requires = "peer", conflicts_with = "server")]
     learn: bool,
     /// Optimism: posterior standard deviations added (0: the mean).
     #[arg(long, value_name = "K", default_value_t = 0.0, requires = "learn")]

@@ -148,11 +148,11 @@ impl Fleet {
         }
     }
 
-    /// Starts usv-i in host i at the paper's start, with the mission file
-    /// unless [`Setup::mission_file`] is off.
+    /// Starts usv-i in host i where the mission file's scenario starts it,
+    /// with the mission file unless [`Setup::mission_file`] is off.
     pub(crate) fn launch(&mut self) {
         self.started = now();
-        for (i, p) in starts().iter().enumerate() {
+        for (i, p) in starts_in(&scenario(self.mission)).iter().enumerate() {
             let host = i + 1;
             let log = self.logs.path().join(format!("{}.log", p.id));
             let mut cmd = self.medium.command(host, BIN);

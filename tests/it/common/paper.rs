@@ -12,6 +12,9 @@ use serde_json::{Value, json};
 pub(crate) const BIN: &str = env!("CARGO_BIN_EXE_seacover");
 /// The paper's scenario: the mission file, and the vessels' starts.
 pub(crate) const PAPER: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/paper.json");
+/// The paper's scenario with every second vessel's actuator four times
+/// as concentrated (β = 0.004: usv-2, -4, -6, -8).
+pub(crate) const MIXED: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/paper-mixed.json");
 /// The paper's square and fleet with a flat risk, the paper's map as its
 /// hidden `truth` (docs/learning.md).
 pub(crate) const LEARNING: &str =
@@ -74,10 +77,21 @@ pub(crate) fn num(v: &Value, what: &str) -> f64 {
         .unwrap_or_else(|| panic!("{what}: not a number: {v}"))
 }
 
+/// The scenario document in `path`.
+pub(crate) fn scenario(path: &str) -> Value {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{path}: {e}"));
+    serde_json::from_str(&text).unwrap_or_else(|e| panic!("{path}: {e}"))
+}
+
 /// The paper's vessels where they start.
 pub(crate) fn starts() -> Vec<Pos> {
-    let vessels = paper()["vessels"].as_array().expect("paper.json: vessels");
-    assert_eq!(vessels.len(), N, "paper.json: {N} vessels");
+    starts_in(paper())
+}
+
+/// The vessels of a scenario of [`N`] where they start.
+pub(crate) fn starts_in(doc: &Value) -> Vec<Pos> {
+    let vessels = doc["vessels"].as_array().expect("a scenario: vessels");
+    assert_eq!(vessels.len(), N, "a scenario of {N} vessels");
     vessels
         .iter()
         .map(|v| Pos {
@@ -128,11 +142,12 @@ pub(crate) fn evaluate(at: &[Pos]) -> Evaluation {
     evaluate_in(paper(), at)
 }
 
-/// [`evaluate`] in another mission: `base` is the paper's scenario with
-/// its region and risk replaced (by [`with_mission`]).
+/// [`evaluate`] in another scenario: `base` (the paper's with its region
+/// and risk replaced by [`with_mission`], or another of its own), each
+/// vessel with its actuator from `base`.
 pub(crate) fn evaluate_in(base: &Value, at: &[Pos]) -> Evaluation {
     let mut doc = base.clone();
-    let actuators: BTreeMap<String, (f64, f64)> = paper()["vessels"]
+    let actuators: BTreeMap<String, (f64, f64)> = base["vessels"]
         .as_array()
         .unwrap()
         .iter()
@@ -244,16 +259,26 @@ pub(crate) fn lloyd_among(at: &[Pos], held: &[Pos]) -> (f64, usize, Vec<Pos>) {
 /// The final H of `seacover sim --scenario paper` (200 s, safety on), run
 /// once per test process.
 pub(crate) fn centralized_h() -> f64 {
-    static H: OnceLock<f64> = OnceLock::new();
-    *H.get_or_init(|| {
+    centralized_h_of("paper")
+}
+
+/// The final H of `seacover sim --scenario SCENARIO` (200 s, safety on),
+/// run once per scenario and test process.
+pub(crate) fn centralized_h_of(scenario: &str) -> f64 {
+    static H: OnceLock<std::sync::Mutex<BTreeMap<String, f64>>> = OnceLock::new();
+    let mut known = H.get_or_init(Default::default).lock().unwrap();
+    *known.entry(scenario.to_string()).or_insert_with(|| {
         let dir = tempfile::tempdir().unwrap();
         let status = Command::new(BIN)
-            .args(["sim", "--scenario", "paper", "--no-figures", "--out"])
+            .args(["sim", "--scenario", scenario, "--no-figures", "--out"])
             .arg(dir.path())
             .stdout(Stdio::null())
             .status()
             .unwrap();
-        assert!(status.success(), "seacover sim --scenario paper: {status}");
+        assert!(
+            status.success(),
+            "seacover sim --scenario {scenario}: {status}"
+        );
         let path = dir.path().join("summary.json");
         let summary: Value =
             serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();

@@ -5,7 +5,10 @@
 use crate::shell::{self, Preset};
 
 #[derive(clap::Args)]
-// One of the two modes, and the error says so when neither is given.
+// One of the two modes, and the error says so when neither is given. A
+// flag of one mode conflicts with the other's: `requires = "peer"` alone
+// is met by `--server`, a member of the same group (measured), and the
+// flag was then ignored.
 #[command(group(clap::ArgGroup::new("mode").required(true).args(["server", "peer"])))]
 pub(crate) struct Args {
     /// Coordinator base URL, e.g. http://127.0.0.1:8080 (not with --peer).
@@ -19,19 +22,30 @@ pub(crate) struct Args {
     /// With --peer: the mission, revision 0 (a mission document as `GET
     /// /api/v1/mission` gives it, or a scenario document); without it the
     /// vessels hold station until a member gives them one.
-    #[arg(long, value_name = "FILE", requires = "peer")]
+    #[arg(
+        long,
+        value_name = "FILE",
+        requires = "peer",
+        conflicts_with = "server"
+    )]
     mission: Option<std::path::PathBuf>,
     #[command(flatten)]
     fleet: shell::Fleet,
     /// With --peer: cover even while hearing no other vessel (single-boat
     /// work). Without it a vessel that hears nobody (the only one left, or
     /// one whose credentials the fleet refuses) holds station and says so.
-    #[arg(long, requires = "peer")]
+    #[arg(long, requires = "peer", conflicts_with = "server")]
     alone: bool,
     /// With --peer and --id: where the vessel starts, in the mission's
     /// local plane [m] and heading [rad]: X,Y or X,Y,PSI.
     #[arg(long, value_name = "X,Y[,PSI]", requires = "id", value_parser = parse_start)]
     start: Option<(f64, f64, f64)>,
+    /// With --peer: the vessels' actuator (f = k·exp(−β‖q − p‖²)), which
+    /// each computes its cell with and announces to the fleet. Unless told:
+    /// the vessel of the same id in a scenario given as --mission, else
+    /// the mission's actuator.
+    #[arg(long, value_name = "K,BETA", requires = "peer", conflicts_with = "server", value_parser = parse_actuator)]
+    actuator: Option<seacover::protocol::ActuatorDocument>,
     #[command(flatten)]
     zenoh: crate::shell::ZenohArgs,
     #[command(flatten)]
@@ -103,6 +117,18 @@ pub(crate) struct Args {
     /// units (> 0).
     #[arg(long, value_name = "SD", requires = "sample_name", value_parser = parse_sample_sd)]
     sample_sd: Option<f64>,
+}
+
+fn parse_actuator(s: &str) -> Result<seacover::protocol::ActuatorDocument, String> {
+    let (k, beta) = s
+        .split_once(',')
+        .ok_or("expected K,BETA (e.g. 0.5,0.004)")?;
+    let a = seacover::protocol::ActuatorDocument {
+        k: k.trim().parse().map_err(|e| format!("K: {e}"))?,
+        beta: beta.trim().parse().map_err(|e| format!("BETA: {e}"))?,
+    };
+    seacover::mission::check_actuator(a, "actuator").map_err(|e| e.to_string())?;
+    Ok(a)
 }
 
 fn parse_sample_name(s: &str) -> Result<String, String> {
@@ -186,8 +212,9 @@ async fn peer(args: Args) -> anyhow::Result<()> {
     // Beacons are aged in mission seconds.
     config.ageing.warp = args.time_warp.factor;
     if let Some(path) = &args.mission {
-        config.mission = Some(seacover::agent::peer::mission_file(path)?);
+        config.load_mission(path)?;
     }
+    config.actuators.given = args.actuator;
     seacover::agent::peer::node::run(config, vessels, shell::stop_on_signal()).await?;
     Ok(())
 }
@@ -216,8 +243,9 @@ async fn bridge(args: Args) -> anyhow::Result<()> {
         config.alone = args.alone;
         args.learn.apply(&mut config)?;
         if let Some(path) = &args.mission {
-            config.mission = Some(seacover::agent::peer::mission_file(path)?);
+            config.load_mission(path)?;
         }
+        config.actuators.given = args.actuator;
         Some(
             seacover::agent::peer::node::Member::join(config, args.id.clone(), &tasks, &stop)
                 .await?,
