@@ -43,8 +43,8 @@ use seacover::mission::Mission;
 
 use crate::common::process::signal;
 use crate::common::sitl::{
-    Bridge, PeerBridges, SPEEDUP, Seen, Station, ardupilot, east_north, evaluate_at as coverage,
-    mission_file, mission_toml, one_sitl_fleet, peer_bridges, positions, scattered_boats, wait_for,
+    Bridge, PeerBridges, SPEEDUP, Seen, Standing, Station, ardupilot, east_north, mission_file,
+    mission_toml, one_sitl_fleet, peer_bridges, positions, scattered_boats, wait_for,
 };
 
 /// Boats, and bridges.
@@ -73,46 +73,9 @@ const STOPPED: f64 = 0.3;
 /// ArduPilot Rover's GUIDED mode.
 const GUIDED: u32 = 15;
 
-/// Where a fleet stands: each boat's distance to its centroid (E), H, and
-/// H with every boat at its centroid.
-#[derive(Debug, Clone)]
-struct Standing {
-    e: Vec<f64>,
-    centroids: Vec<(f64, f64)>,
-    h: f64,
-    ideal: f64,
-}
-
-impl Standing {
-    fn of(m: &Mission, at: &[(f64, f64)]) -> Standing {
-        let now = coverage(m, at);
-        let centroids: Vec<(f64, f64)> = now
-            .cells
-            .iter()
-            .map(|c| (c.centroid.x, c.centroid.y))
-            .collect();
-        let e = at
-            .iter()
-            .zip(&centroids)
-            .map(|(p, c)| (p.0 - c.0).hypot(p.1 - c.1))
-            .collect();
-        Standing {
-            e,
-            h: now.h,
-            ideal: coverage(m, &centroids).h,
-            centroids,
-        }
-    }
-    fn e_max(&self) -> f64 {
-        self.e.iter().copied().fold(0.0, f64::max)
-    }
-    /// (H − H at the centroids) / H at the centroids.
-    fn gap(&self) -> f64 {
-        (self.h - self.ideal) / self.ideal
-    }
-    fn arrived(&self) -> bool {
-        self.e_max() <= E_MAX
-    }
+/// Whether every boat has arrived at its centroid.
+fn arrived(s: &Standing) -> bool {
+    s.e_max() <= E_MAX
 }
 
 /// The closest two boats of `at` are [m].
@@ -296,7 +259,7 @@ async fn four_peer_bridges_converge_without_a_coordinator_and_take_over_a_killed
         CONVERGE_S,
         &mut closest,
         &mut trace,
-        |s| s.arrived() && s.gap().abs() <= H_GAP,
+        |s| arrived(s) && s.gap().abs() <= H_GAP,
     )
     .await;
     let a_line = match converged {
@@ -419,7 +382,7 @@ async fn four_peer_bridges_converge_without_a_coordinator_and_take_over_a_killed
         RECONVERGE_S,
         &mut closest,
         &mut trace,
-        Standing::arrived,
+        arrived,
     )
     .await;
     let moved = before.map_or("?".into(), |s| {

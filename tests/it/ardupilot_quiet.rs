@@ -12,10 +12,9 @@
 
 use std::time::Duration;
 
-use crate::common::sitl::{
-    Bridge, Coordinator, Station, coverage_now, mission, quiet_arrival, scattered_boats, wait_for,
-};
+use crate::common::sitl::{Bridge, Coordinator, Station, mission, scattered_boats, wait_for};
 use crate::common::sitl::{ardupilot, one_sitl_fleet};
+use crate::common::sitl_quiet::{coverage_now, quiet_arrival};
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn boats_handed_their_goals_keep_station_on_their_own_loiter() {

@@ -31,10 +31,11 @@ use seacover::protocol::VesselStatusDocument;
 use serde_json::json;
 
 use crate::common::sitl::{
-    Bridge, Coordinator, ORIGIN, Seen, Station, all_stopped, boat, coverage_now, east_north,
-    mission, place, quiet_over, scattered_boats, under_way, wait_for,
+    Bridge, Coordinator, ORIGIN, Seen, Station, all_stopped, boat, east_north, mission, place,
+    scattered_boats, under_way, wait_for,
 };
 pub(crate) use crate::common::sitl::{ardupilot, one_sitl_fleet};
+use crate::common::sitl_quiet::{coverage_now, quiet_over};
 
 fn vessel<'a>(vessels: &'a [VesselStatusDocument], id: &str) -> Option<&'a VesselStatusDocument> {
     vessels.iter().find(|v| v.id == id)

@@ -16,6 +16,7 @@ mod ardupilot_peer;
 mod ardupilot_quiet;
 mod ardupilot_samples;
 mod ardupilot_sitl;
+mod ardupilot_split;
 mod cli;
 mod curved;
 mod dashboard;

@@ -3,10 +3,12 @@
 //! ([`inprocess`]), vessel links ([`link`]), positions placed by
 //! geographiclib ([`geo`]), and network namespaces as a radio medium with
 //! the Python observer of peer fleets ([`netns`], [`peer`]), and ArduPilot
-//! SITL boats with a ground station on each ([`sitl`]); the lock that
-//! keeps the heavy ones from running side by side ([`machine`]). Some helpers
-//! serve only tests that skip without their tool (ArduPilot, chromium,
-//! root), hence `dead_code` is allowed.
+//! SITL boats with a ground station on each ([`sitl`]), also each with its
+//! bridge in a namespace of its own on a medium ([`sitl_medium`]), and how
+//! still they are ([`sitl_quiet`]); the lock
+//! that keeps the heavy ones from running side by side ([`machine`]). Some
+//! helpers serve only tests that skip without their tool (ArduPilot,
+//! chromium, root), hence `dead_code` is allowed.
 #![allow(dead_code)]
 
 pub(crate) mod browser;
@@ -22,3 +24,5 @@ pub(crate) mod process;
 pub(crate) mod schema;
 pub(crate) mod server;
 pub(crate) mod sitl;
+pub(crate) mod sitl_medium;
+pub(crate) mod sitl_quiet;

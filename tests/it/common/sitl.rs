@@ -4,7 +4,9 @@
 //! processes on free instances, positions placed and read back by
 //! geographiclib, `seacover agent --mavlink …` as a process with its JSON log
 //! collected, and an operator's ground station on a boat's second MAVLink
-//! port ([`Station`]), which is what the tests judge by.
+//! port ([`Station`]), which is what the tests judge by. The same boats,
+//! bridges and stations each in a network namespace of their own are
+//! [`super::sitl_medium`]'s.
 //!
 //! SITL runs at [`SPEEDUP`]; durations of the boats' world are read on
 //! ArduPilot's own clock (`time_boot_ms`). Without a binary the tests say so
@@ -122,7 +124,21 @@ pub(crate) fn boat_with(
     heading_deg: f64,
     script: Option<&str>,
 ) -> Boat {
-    let i = instance();
+    let command = Command::new(&ap.binary);
+    boat_by(command, instance(), ap, sysid, (home, heading_deg), script)
+}
+
+/// [`boat_with`] started as `command` (the SITL binary, or a program that
+/// runs it: [`super::sitl_medium`] runs it inside a network namespace) on
+/// SITL instance `i`.
+pub(crate) fn boat_by(
+    mut command: Command,
+    i: u32,
+    ap: &Ardupilot,
+    sysid: u8,
+    (home, heading_deg): ((f64, f64), f64),
+    script: Option<&str>,
+) -> Boat {
     let dir = tempfile::tempdir().unwrap();
     let mut defaults = ap.defaults.clone();
     if let Some(lua) = script {
@@ -132,7 +148,7 @@ pub(crate) fn boat_with(
         std::fs::write(&parm, "SCR_ENABLE 1\n").unwrap();
         defaults = format!("{defaults},{}", parm.display());
     }
-    let child = Command::new(&ap.binary)
+    let child = command
         .args(["--model", "motorboat", "--defaults", &defaults])
         .arg("--home")
         .arg(format!("{:.7},{:.7},0,{heading_deg}", home.0, home.1))
@@ -199,7 +215,13 @@ impl Bridge {
 
     /// `seacover --log-format json agent ARGS…` at `RUST_LOG=info`.
     pub(crate) fn agent(args: &[String]) -> Bridge {
-        let mut command = Command::new(env!("CARGO_BIN_EXE_seacover"));
+        Bridge::agent_by(Command::new(env!("CARGO_BIN_EXE_seacover")), args)
+    }
+
+    /// [`Bridge::agent`] started as `command` (the binary, or a program
+    /// that runs it: [`super::sitl_medium`] runs it inside a network
+    /// namespace).
+    pub(crate) fn agent_by(mut command: Command, args: &[String]) -> Bridge {
         command
             .args(["--log-format", "json", "agent"])
             .args(args)
@@ -320,8 +342,18 @@ impl Station {
                 Err(e) => panic!("{address}: {e}"),
             }
         };
+        Station::watch(connection, boat.sysid).await
+    }
+
+    /// A ground station on `connection`, open to boat `sysid`'s second
+    /// port: what it reports is collected from now on, at the bridge's
+    /// rates.
+    pub(crate) async fn watch(
+        connection: Arc<mavlink::AsyncConnection<MavMessage>>,
+        sysid: u8,
+    ) -> Station {
         let seen = Arc::new(Mutex::new(Seen::default()));
-        let (reader, sink, sysid) = (connection.clone(), seen.clone(), boat.sysid);
+        let (reader, sink) = (connection.clone(), seen.clone());
         tokio::spawn(async move {
             while let Ok((header, message)) = reader.recv().await {
                 if header.system_id != u32::from(sysid) || header.component_id != 1 {
@@ -511,134 +543,6 @@ pub(crate) fn mission(dir: &Path) -> PathBuf {
     path
 }
 
-/// How still the boats are from now over the next `ms` of ArduPilot's
-/// clock, from their own telemetry: each boat's mean |yaw rate| (ATTITUDE,
-/// rad/s) and mean speed over ground (GLOBAL_POSITION_INT, m/s).
-pub(crate) async fn quiet_over(stations: &[Station], ms: u32) -> Vec<(f64, f64)> {
-    let from: Vec<u32> = stations.iter().map(|s| s.seen(Seen::clock_ms)).collect();
-    wait_for(Duration::from_secs(60), async || {
-        passed(stations, &from, ms).then_some(())
-    })
-    .await
-    .expect("the boats' clocks advance");
-    stillness(stations, &from)
-}
-
-fn passed(stations: &[Station], from: &[u32], ms: u32) -> bool {
-    stations
-        .iter()
-        .zip(from)
-        .all(|(s, t0)| s.seen(Seen::clock_ms) >= t0 + ms)
-}
-
-fn stillness(stations: &[Station], from: &[u32]) -> Vec<(f64, f64)> {
-    let mean = |x: Vec<f64>| x.iter().sum::<f64>() / x.len().max(1) as f64;
-    stations
-        .iter()
-        .zip(from)
-        .map(|(s, t0)| {
-            s.seen(|s| {
-                let r = s
-                    .attitudes
-                    .range(t0..)
-                    .map(|(_, (_, rate))| f64::from(*rate).abs());
-                let v = (s.positions.range(t0..))
-                    .map(|(_, p)| f64::from(p.vx).hypot(f64::from(p.vy)) / 100.0);
-                (mean(r.collect()), mean(v.collect()))
-            })
-        })
-        .collect()
-}
-
-/// Quiet arrival on ArduPilot boats (docs/ardupilot.md): how long after
-/// now (ArduPilot's clock, s) every boat was commanded to keep station,
-/// and then, after `settle` ms for it to reach the point, over `ms`: each
-/// boat's mean |yaw rate| and mean speed ([`quiet_over`]'s), the largest
-/// distance from its goal the coordinator saw, and how many of its
-/// commands then did not say `station`.
-pub(crate) struct Arrival {
-    pub keeping_after: f64,
-    pub boats: Vec<(f64, f64, f64, usize)>,
-}
-
-pub(crate) async fn quiet_arrival(
-    stations: &[Station],
-    ids: &[String],
-    vessels: impl AsyncFn() -> Vec<seacover::protocol::VesselStatusDocument>,
-    (settle, ms): (u32, u32),
-) -> Option<Arrival> {
-    let start = stations[0].seen(Seen::clock_ms);
-    let keeping = wait_for(Duration::from_secs(120), async || {
-        let vs = vessels().await;
-        ids.iter()
-            .all(|id| {
-                vs.iter().any(|v| {
-                    v.id == *id && v.last_command.as_ref().is_some_and(|c| c.station.is_some())
-                })
-            })
-            .then(|| stations[0].seen(Seen::clock_ms))
-    })
-    .await?;
-    let now: Vec<u32> = stations.iter().map(|s| s.seen(Seen::clock_ms)).collect();
-    wait_for(Duration::from_secs(60), async || {
-        passed(stations, &now, settle).then_some(())
-    })
-    .await?;
-    let from: Vec<u32> = stations.iter().map(|s| s.seen(Seen::clock_ms)).collect();
-    let mut far = vec![(0.0f64, 0usize); ids.len()];
-    let began = Instant::now();
-    while !passed(stations, &from, ms) && began.elapsed() < Duration::from_secs(60) {
-        tokio::time::sleep(Duration::from_millis(100)).await;
-        let vs = vessels().await;
-        for (k, id) in ids.iter().enumerate() {
-            let Some(v) = vs.iter().find(|v| v.id == *id) else {
-                continue;
-            };
-            if let (Some(p), Some(c)) = (&v.pose, &v.centroid) {
-                far[k].0 = far[k].0.max((c[0] - p.x).hypot(c[1] - p.y));
-            }
-            if v.last_command.as_ref().is_none_or(|c| c.station.is_none()) {
-                far[k].1 += 1;
-            }
-        }
-    }
-    let boats = stillness(stations, &from)
-        .into_iter()
-        .zip(far)
-        .map(|((r, v), (e, off))| (r, v, e, off))
-        .collect();
-    Some(Arrival {
-        keeping_after: f64::from(keeping - start) / 1000.0,
-        boats,
-    })
-}
-
-/// H now (`GET /api/v1/coverage` of the coordinator at `base`) and H with
-/// every vessel of `vessels` that has a cell at its centroid (`POST
-/// /api/v1/coverage/evaluate`).
-pub(crate) async fn coverage_now(
-    http: &reqwest::Client,
-    base: &str,
-    vessels: &[seacover::protocol::VesselStatusDocument],
-) -> (f64, f64) {
-    let now: seacover::protocol::CoverageDocument =
-        crate::common::server::get_json(http, &format!("{base}/api/v1/coverage")).await;
-    let at_centroids = serde_json::json!({"vessels": vessels.iter().filter_map(|v| {
-        let c = v.centroid?;
-        Some(serde_json::json!({"id": v.id, "x": c[0], "y": c[1]}))
-    }).collect::<Vec<_>>()});
-    let ideal: serde_json::Value = http
-        .post(format!("{base}/api/v1/coverage/evaluate"))
-        .json(&at_centroids)
-        .send()
-        .await
-        .unwrap()
-        .json()
-        .await
-        .unwrap();
-    (now.h, ideal["H"].as_f64().unwrap())
-}
-
 /// `seacover serve` as a process, at the boats' time warp, on a data
 /// directory and a mission file.
 pub(crate) struct Coordinator {
@@ -746,10 +650,17 @@ pub(crate) fn evaluate_at(
 pub(crate) fn scattered_boats(ap: &Ardupilot, script: Option<&str>) -> Vec<Boat> {
     (0..4u8)
         .map(|i| {
-            let home = place(70.0, 30.0 + 90.0 * f64::from(i));
-            boat_with(ap, i + 1, home, 45.0 + 100.0 * f64::from(i), script)
+            let (home, heading) = scattered_start(i);
+            boat_with(ap, i + 1, home, heading, script)
         })
         .collect()
+}
+
+/// Where [`scattered_boats`] starts boat `i` (0 to 3): its home (lat, lon)
+/// and heading [°].
+pub(crate) fn scattered_start(i: u8) -> ((f64, f64), f64) {
+    let home = place(70.0, 30.0 + 90.0 * f64::from(i));
+    (home, 45.0 + 100.0 * f64::from(i))
 }
 
 /// Peer bridges, one per boat, and how to reach them.
@@ -792,24 +703,13 @@ pub(crate) fn peer_bridges(
         .iter()
         .enumerate()
         .map(|(i, b)| {
-            let mut args: Vec<String> = [
-                "--mavlink",
-                &format!("tcpout:127.0.0.1:{}", b.primary),
-                "--id",
-                &ids[i],
-                "--peer",
-                "--arm",
-                "--fleet",
-                &fleet,
-                "--mission",
-                &mission.display().to_string(),
-                "--zenoh-config",
-                &zenoh.display().to_string(),
-                "--zenoh-listen",
-                &format!("tcp/127.0.0.1:{}", ports[i]),
-            ]
-            .map(String::from)
-            .to_vec();
+            let mut args = peer_bridge_args(b, &ids[i], &fleet, mission);
+            args.extend([
+                "--zenoh-config".into(),
+                zenoh.display().to_string(),
+                "--zenoh-listen".into(),
+                format!("tcp/127.0.0.1:{}", ports[i]),
+            ]);
             args.extend(extra.iter().map(|a| a.to_string()));
             for p in &ports[..i] {
                 args.extend(["--zenoh-connect".into(), format!("tcp/127.0.0.1:{p}")]);
@@ -823,5 +723,66 @@ pub(crate) fn peer_bridges(
         ports,
         zenoh,
         fleet,
+    }
+}
+
+/// The flags of `boat`'s bridge as its peer node `id` of `fleet`, with
+/// `mission` as revision 0 and arming it.
+pub(crate) fn peer_bridge_args(boat: &Boat, id: &str, fleet: &str, mission: &Path) -> Vec<String> {
+    [
+        "--mavlink",
+        &format!("tcpout:127.0.0.1:{}", boat.primary),
+        "--id",
+        id,
+        "--peer",
+        "--arm",
+        "--fleet",
+        fleet,
+        "--mission",
+        &mission.display().to_string(),
+    ]
+    .map(String::from)
+    .to_vec()
+}
+
+/// Where a fleet stands: each boat's distance to its centroid (E), H, and
+/// H with every boat at its centroid, by the library's centralized
+/// evaluation of `at` ([`evaluate_at`]).
+#[derive(Debug, Clone)]
+pub(crate) struct Standing {
+    pub e: Vec<f64>,
+    pub centroids: Vec<(f64, f64)>,
+    pub h: f64,
+    pub ideal: f64,
+}
+
+impl Standing {
+    pub(crate) fn of(m: &seacover::mission::Mission, at: &[(f64, f64)]) -> Standing {
+        let now = evaluate_at(m, at);
+        let centroids: Vec<(f64, f64)> = now
+            .cells
+            .iter()
+            .map(|c| (c.centroid.x, c.centroid.y))
+            .collect();
+        let e = at
+            .iter()
+            .zip(&centroids)
+            .map(|(p, c)| (p.0 - c.0).hypot(p.1 - c.1))
+            .collect();
+        Standing {
+            e,
+            h: now.h,
+            ideal: evaluate_at(m, &centroids).h,
+            centroids,
+        }
+    }
+
+    pub(crate) fn e_max(&self) -> f64 {
+        self.e.iter().copied().fold(0.0, f64::max)
+    }
+
+    /// (H − H at the centroids) / H at the centroids.
+    pub(crate) fn gap(&self) -> f64 {
+        (self.h - self.ideal) / self.ideal
     }
 }
