@@ -1,10 +1,14 @@
 //! Who may join a peer fleet (docs/peer.md, test f): three `seacover agent
 //! --peer` vessels with the fleet's credentials (`seacover fleet
-//! credentials`, Zenoh's user/password authentication), each in its own
-//! network namespace; an independent Python observer with the credentials;
-//! and, in one more namespace, first a program without them (it must hear
-//! nothing and be heard by nobody), then one with them that sends every
-//! kind of bad input. Nothing may change (missions, who is in the
+//! credentials`: a certificate each from the fleet's authority, mutual TLS
+//! over QUIC datagrams), each in its own network namespace; an independent
+//! Python observer with its own certificate; and, in one more namespace,
+//! first two programs without the fleet's credentials (none, and a
+//! certificate from another authority: neither may hear anything nor be
+//! heard by anybody), then one with them that sends every kind of bad
+//! input. A capture on the medium, from before the vessels start until the
+//! outsiders leave, must read none of the fleet's ids, keys, missions or
+//! statuses in the clear. Nothing may change (missions, who is in the
 //! partition, positions), every refusal must be counted in the vessels'
 //! status, and a sender whose beacons are well formed but implausible (far
 //! outside the region) must show as quarantined there.
@@ -14,7 +18,6 @@
 //! under CI=true.
 
 use std::path::Path;
-use std::process::Command;
 use std::thread::sleep;
 use std::time::Duration;
 
@@ -23,6 +26,7 @@ use serde_json::{Value, json};
 use crate::common::netns::{Medium, cleanup_stale, root_or_skip};
 use crate::common::peer::{INJECT, Observer, now, python_or_skip, start_ready, wait_for};
 use crate::common::process::KillOnDrop;
+use crate::common::secure::{Capture, make_credentials, member_config};
 
 const SEACOVER: &str = env!("CARGO_BIN_EXE_seacover");
 const FLEET: &str = "trust";
@@ -42,21 +46,44 @@ const TEN_AT_5_HZ: [&str; 8] = [
 ];
 const PAPER: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/paper.json");
 
-/// Vessel `usv-<i+1>` in host `i`, with the credentials. Its log goes to
-/// `usv-<i+1>.log` beside them: the refusals it logs are what this test
-/// provokes, not news for the test's output.
-fn vessel(medium: &Medium, i: usize, config: &Path) -> KillOnDrop {
-    let log = config.with_file_name(format!("usv-{}.log", i + 1));
+/// Vessel `usv-<i+1>` in host `i`, with its credentials (its own
+/// directory in `creds`). Its log goes to `usv-<i+1>.log` in `creds`: the
+/// refusals it logs are what this test provokes, not news for the test's output.
+fn vessel(medium: &Medium, i: usize, creds: &Path) -> KillOnDrop {
+    let id = format!("usv-{}", i + 1);
+    let config = member_config(creds, &id);
+    let log = creds.join(format!("{id}.log"));
     let start = format!("{},{}", 20.0 + 25.0 * i as f64, 30.0 + 10.0 * i as f64);
     let mut cmd = medium.command(i, SEACOVER);
-    cmd.args(["agent", "--peer", "--fleet", FLEET, "--id"])
-        .arg(format!("usv-{}", i + 1))
+    cmd.args(["agent", "--peer", "--fleet", FLEET, "--id", &id])
         .args(["--start", &start, "--mission", PAPER, "--time-warp", "2"])
         .arg("--zenoh-config")
         .arg(config)
         .env("RUST_LOG", "warn")
         .stderr(std::fs::File::create(log).unwrap());
     KillOnDrop(cmd.spawn().expect("seacover agent starts"))
+}
+
+/// `seacover fleet credentials` for fleet `fleet` and `members` (comma
+/// separated) in `dir/name`.
+fn credentials(dir: &Path, name: &str, fleet: &str, members: &str) -> std::path::PathBuf {
+    let members: Vec<String> = members.split(',').map(String::from).collect();
+    make_credentials(&dir.join(name), fleet, &members)
+}
+
+/// What a receiver on the medium must not read: the vessels' ids, the
+/// fleet's keys, a mission's and a status's JSON.
+fn needles() -> Vec<String> {
+    [
+        "usv-1",
+        "usv-2",
+        "usv-3",
+        "seacover/trust/",
+        "\"region\"",
+        "\"neighbours\"",
+    ]
+    .map(String::from)
+    .to_vec()
 }
 
 /// Runs inject.py in host `host` to completion (it exits after its last
@@ -96,99 +123,107 @@ fn without_credentials_nothing_is_heard_and_with_them_bad_input_changes_nothing(
     };
     cleanup_stale();
     let dir = tempfile::tempdir().unwrap();
-    let creds = dir.path().join("creds");
-    let out = Command::new(SEACOVER)
-        .args(["fleet", "credentials", "--fleet", FLEET])
-        .arg(&creds)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let creds = credentials(
+        dir.path(),
+        "creds",
+        FLEET,
+        "usv-1,usv-2,usv-3,observer,injector",
     );
-    let config = creds.join("zenoh.json5");
-    assert_eq!(
-        String::from_utf8_lossy(&out.stdout).trim(),
-        config.display().to_string()
-    );
+    // Another fleet's authority: a certificate, but not this fleet's.
+    let other = credentials(dir.path(), "other", "other", "intruder");
 
-    // Hosts 0–2: vessels; 3: the observer; 4: the outsider.
+    // Hosts 0–2: vessels; 3: the observer; 4: the outsiders.
     let medium = Medium::new(5);
-    let _vessels: Vec<KillOnDrop> = (0..3).map(|i| vessel(&medium, i, &config)).collect();
-    let config_arg = config.to_str().unwrap();
+    let capture = Capture::start(&medium, &python, &needles());
+    let _vessels: Vec<KillOnDrop> = (0..3).map(|i| vessel(&medium, i, &creds)).collect();
+    let observer_config = member_config(&creds, "observer");
     let observer = Observer::start(
         &medium,
         3,
         &python,
         FLEET,
-        &["--config", config_arg, "--query-status-every", "1"],
+        &[
+            "--config",
+            &observer_config,
+            "--query-status-every",
+            "1",
+            "--query-mission-every",
+            "2",
+        ],
     );
-    let outsider = Observer::start(&medium, 4, &python, FLEET, &[]);
+    let intruder = member_config(&other, "intruder");
+    // Without a certificate, and with one from another authority.
+    let outsiders = [
+        Observer::start(&medium, 4, &python, FLEET, &[]),
+        Observer::start(&medium, 4, &python, FLEET, &["--config", &intruder]),
+    ];
     // The fleet is up: every vessel is heard by the observer, and each one
     // has the other two in its partition.
     wait_for(30.0, "every vessel sees the other two", || {
         let s = statuses(&observer);
         (s.len() == 3 && s.values().all(|d| d["neighbours"] == 2)).then_some(())
     });
-    // A program without the credentials: it hears nothing, and what it
-    // sends reaches nobody.
-    let evil = json!({
-        "id": "evil", "seq": 0, "t": 0.0, "x": 50.0, "y": 50.0, "psi": 0.0, "u": 0.0,
-        "v": 0.0, "r": 0.0, "k": 0.5, "beta": 0.001, "rev": 0, "controlled": true,
-    });
-    inject(
-        &medium,
-        &python,
-        4,
-        &[
-            "--fleet",
-            FLEET,
-            "--key-suffix",
-            "beacon/evil",
-            "--cbor-json",
-            &evil.to_string(),
-            "--stamp",
-            "--count",
-            "20",
-            "--hz",
-            "10",
-        ],
-    );
+    // A program without the fleet's credentials: it hears nothing, and
+    // what it sends reaches nobody.
+    for (who, config) in [("evil", None), ("evil2", Some(intruder.as_str()))] {
+        let evil = json!({
+            "id": who, "seq": 0, "t": 0.0, "x": 50.0, "y": 50.0, "psi": 0.0, "u": 0.0,
+            "v": 0.0, "r": 0.0, "k": 0.5, "beta": 0.001, "rev": 0, "controlled": true,
+        });
+        let key = format!("beacon/{who}");
+        let mut args = vec!["--fleet", FLEET, "--key-suffix", &key, "--cbor-json"];
+        let evil = evil.to_string();
+        args.extend([evil.as_str(), "--stamp", "--count", "20", "--hz", "10"]);
+        args.extend(config.iter().flat_map(|c| ["--config", c]));
+        inject(&medium, &python, 4, &args);
+    }
     sleep(Duration::from_secs(3));
-    // It does hear itself (the outsider's own injector, beside it), never
-    // the fleet: no beacon, token or mission of a vessel.
-    let overheard = outsider
-        .records()
+    // They do hear themselves (the outsiders' own injectors, beside
+    // them), never the fleet: no beacon, token or mission of a vessel.
+    let overheard: Vec<usize> = outsiders
         .iter()
-        .filter(|r| r["key"].as_str().is_some_and(|k| !k.ends_with("/evil")))
-        .count();
+        .map(|o| {
+            o.records()
+                .iter()
+                .filter(|r| r["key"].as_str().is_some_and(|k| !k.contains("/evil")))
+                .count()
+        })
+        .collect();
     let heard_by_observer = observer.of_kind("beacon").len();
+    let read = capture.finish();
     println!(
-        "peer_trust: without credentials the outsider recorded {overheard} messages; the observer with them {heard_by_observer} beacons"
+        "peer_trust: without the fleet's credentials the outsiders recorded {overheard:?} messages \
+         (none; another authority's); the observer with them {heard_by_observer} beacons; the \
+         medium's capture {read}"
     );
     assert_eq!(
         overheard,
-        0,
-        "a program without credentials heard the fleet: {:?}",
-        outsider.records()
+        [0, 0],
+        "a program without the fleet's credentials heard the fleet: {:?}",
+        outsiders.iter().map(Observer::records).collect::<Vec<_>>()
     );
     assert!(
         heard_by_observer > 30,
         "the observer with credentials heard only {heard_by_observer} beacons"
     );
+    let found = read["found"].as_object().cloned().unwrap_or_default();
+    assert!(
+        found.values().all(|n| n == 0) && read["frames"].as_u64() > Some(500),
+        "a receiver on the medium read the fleet in the clear: {read}"
+    );
     let before = statuses(&observer);
     for (id, doc) in &before {
         assert!(
-            doc["heard"].get("evil").is_none(),
-            "{id} heard the outsider: {doc}"
+            doc["heard"].get("evil").is_none() && doc["heard"].get("evil2").is_none(),
+            "{id} heard an outsider: {doc}"
         );
         assert_eq!(doc["revision"], 0, "{id}: {doc}");
     }
-    drop(outsider);
+    drop(outsiders);
 
     // With the credentials, every kind of bad input of §3.
-    let c = ["--config", config_arg];
+    let injector = member_config(&creds, "injector");
+    let c = ["--config", injector.as_str()];
     let stamp = |x: f64, u: f64, id: &str| {
         json!({
             "id": id, "seq": 0, "t": 0.0, "x": x, "y": 40.0, "psi": 0.0, "u": u, "v": 0.0,

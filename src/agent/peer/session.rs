@@ -4,7 +4,9 @@
 //!
 //! Without endpoints a member finds the others by Zenoh's multicast
 //! scouting (a LAN); `--zenoh-listen`/`--zenoh-connect` (`tcp/ADDR:PORT`,
-//! `udp/…`, `tls/…`) cover networks where multicast does not pass.
+//! `udp/…`, `quic/…`, `tls/…`) cover networks where multicast does not
+//! pass. With a fleet's credentials ([`credentials`](super::credentials))
+//! only the encrypted ones (`quic/`, `tls/`) are taken.
 
 use std::path::PathBuf;
 
@@ -37,8 +39,9 @@ impl ZenohOptions {
             None => zenoh::Config::default(),
         };
         if let Some(path) = &self.config {
-            resolve_dictionary(&mut config, path)?;
+            resolve_files(&mut config, path)?;
         }
+        check_encrypted(&config, &[&self.listen[..], &self.connect[..]].concat())?;
         let mode = match self.mode {
             Mode::Peer => "\"peer\"",
             Mode::Router => "\"router\"",
@@ -101,32 +104,55 @@ fn bad(e: impl std::fmt::Display) -> PeerError {
     PeerError::Config(e.to_string())
 }
 
-/// A relative `transport/auth/usrpwd/dictionary_file` is read next to the
-/// configuration file, not in the working directory, and so is an
-/// absolute one that does not exist but has a namesake there: a
-/// credentials directory works wherever it is copied.
-fn resolve_dictionary(config: &mut zenoh::Config, path: &std::path::Path) -> Result<(), PeerError> {
-    const KEY: &str = "transport/auth/usrpwd/dictionary_file";
-    let Ok(json) = config.get_json(KEY) else {
-        return Ok(());
-    };
-    let Ok(Some(file)) = serde_json::from_str::<Option<String>>(&json) else {
-        return Ok(());
-    };
-    let file = std::path::Path::new(&file);
-    let dir = path.parent().unwrap_or(std::path::Path::new("."));
-    let beside = file.file_name().map(|name| dir.join(name));
-    let moved = file.is_absolute() && !file.exists() && beside.as_ref().is_some_and(|b| b.exists());
-    if file.is_relative() || moved {
-        let full = if moved {
-            beside.expect("checked")
-        } else {
-            dir.join(file)
+/// A relative file of a fleet's credentials
+/// ([`credentials::FILES`](super::credentials::FILES)) is read next to
+/// the configuration file, not in the working directory, and so is an
+/// absolute one that does not exist but has a namesake there: a member's
+/// directory works wherever it is copied.
+fn resolve_files(config: &mut zenoh::Config, path: &std::path::Path) -> Result<(), PeerError> {
+    for (key, _) in super::credentials::FILES {
+        let key = format!("transport/link/tls/{key}");
+        let Ok(json) = config.get_json(&key) else {
+            continue;
         };
-        let value = serde_json::to_string(&full.to_string_lossy()).expect("strings serialize");
-        config.insert_json5(KEY, &value).map_err(bad)?;
+        let Ok(Some(file)) = serde_json::from_str::<Option<String>>(&json) else {
+            continue;
+        };
+        let file = std::path::Path::new(&file);
+        let dir = path.parent().unwrap_or(std::path::Path::new("."));
+        let beside = file.file_name().map(|name| dir.join(name));
+        let moved =
+            file.is_absolute() && !file.exists() && beside.as_ref().is_some_and(|b| b.exists());
+        if file.is_relative() || moved {
+            let full = if moved {
+                beside.expect("checked")
+            } else {
+                dir.join(file)
+            };
+            let value = serde_json::to_string(&full.to_string_lossy()).expect("strings serialize");
+            config.insert_json5(&key, &value).map_err(bad)?;
+        }
     }
     Ok(())
+}
+
+/// With a fleet's credentials (mutual TLS) every endpoint must be an
+/// encrypted one: a `udp/` or `tcp/` endpoint given beside them would
+/// carry the fleet's beacons in the clear, to anyone.
+fn check_encrypted(config: &zenoh::Config, endpoints: &[String]) -> Result<(), PeerError> {
+    let mtls = config.get_json("transport/link/tls/enable_mtls").ok();
+    if mtls.as_deref() != Some("true") {
+        return Ok(());
+    }
+    match endpoints
+        .iter()
+        .find(|e| !(e.starts_with("quic/") || e.starts_with("tls/")))
+    {
+        Some(e) => Err(PeerError::Config(format!(
+            "{e}: with the fleet's credentials every endpoint is quic/ or tls/ (encrypted)"
+        ))),
+        None => Ok(()),
+    }
 }
 
 #[cfg(test)]
@@ -161,6 +187,32 @@ mod tests {
                 .to_string()
                 .contains("udp")
         );
+    }
+
+    #[test]
+    fn a_member_directory_works_where_it_is_copied_and_only_encrypted() {
+        let dir = tempfile::tempdir().unwrap();
+        let creds = dir.path().join("creds");
+        let configs =
+            super::super::credentials::create(&creds, "bay", &["usv-1".into()], 30).unwrap();
+        let moved = dir.path().join("boat");
+        std::fs::rename(configs[0].parent().unwrap(), &moved).unwrap();
+        let options = ZenohOptions {
+            config: Some(moved.join("zenoh.json5")),
+            ..Default::default()
+        };
+        let config = options.config().unwrap();
+        let ca = config
+            .get_json("transport/link/tls/root_ca_certificate")
+            .unwrap();
+        let expected = moved.join("ca.pem");
+        assert_eq!(ca, serde_json::to_string(&expected).unwrap());
+        let clear = ZenohOptions {
+            listen: vec!["udp/0.0.0.0:7447".into()],
+            ..options
+        };
+        let refused = clear.config().unwrap_err().to_string();
+        assert!(refused.contains("udp/0.0.0.0:7447"), "{refused}");
     }
 
     #[test]

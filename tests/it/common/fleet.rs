@@ -16,6 +16,7 @@ use super::netns::{Medium, cleanup_stale, root_or_skip};
 use super::paper::*;
 use super::peer::{Observer, Tail, now, python_or_skip, wait_for};
 use super::process::{KillOnDrop, signal};
+use super::secure::{credentials, member_config};
 
 // ---------------------------------------------------------------------------
 // The fleet: the medium, the observers and the vessels.
@@ -43,6 +44,9 @@ pub(crate) struct Setup {
     /// One vessel whose wall clock is off by this (libfaketime's offset,
     /// e.g. `+2s`; its monotonic clock untouched).
     pub clock_off: Option<(String, String)>,
+    /// The fleet's credentials (`seacover fleet credentials`: mutual TLS
+    /// over QUIC datagrams) for every vessel and observer.
+    pub credentials: bool,
 }
 
 impl Setup {
@@ -57,6 +61,7 @@ impl Setup {
             mission_file: true,
             mission: PAPER,
             clock_off: None,
+            credentials: false,
         }
     }
 
@@ -91,6 +96,10 @@ pub(crate) struct Fleet {
     pub mission_file: bool,
     pub mission: &'static str,
     pub clock_off: Option<(String, String)>,
+    /// The credentials' directory, with [`Setup::credentials`].
+    pub credentials: Option<PathBuf>,
+    /// The observers' flags (each adds its own credentials).
+    pub observer_args: Vec<String>,
     /// The shore process's host, with [`Setup::shore`].
     pub shore: Option<usize>,
     // Fields drop in order: the processes before the medium.
@@ -119,14 +128,12 @@ impl Fleet {
         let hosts = N + setup.observers + usize::from(setup.shore);
         let medium = Medium::new(hosts);
         let name = format!("pf{}{}", std::process::id(), setup.tag);
-        let args: Vec<&str> = setup.observer_args.iter().map(String::as_str).collect();
+        let logs = tempfile::tempdir().unwrap();
         let observer_hosts = [0, N + 1];
-        let observers: Vec<Observer> = observer_hosts[..setup.observers]
-            .iter()
-            .map(|&h| Observer::start(&medium, h, python, &name, &args))
-            .collect();
-        let tails = observers.iter().map(Observer::tail).collect();
-        Fleet {
+        let credentials = setup
+            .credentials
+            .then(|| credentials(logs.path(), &name, &observer_hosts));
+        let mut fleet = Fleet {
             name,
             warp: setup.warp,
             started: 0.0,
@@ -134,18 +141,40 @@ impl Fleet {
             mission_file: setup.mission_file,
             mission: setup.mission,
             clock_off: setup.clock_off,
+            credentials,
+            observer_args: setup.observer_args,
             shore: setup.shore.then_some(hosts - 1),
             vessels: Vec::new(),
-            observers,
-            tails,
+            observers: Vec::new(),
+            tails: Vec::new(),
             beacons: Vec::new(),
             statuses: Vec::new(),
             other: Vec::new(),
             latest: BTreeMap::new(),
-            logs: tempfile::tempdir().unwrap(),
+            logs,
             medium,
             _heavy: heavy,
+        };
+        for &h in &observer_hosts[..setup.observers] {
+            fleet.start_observer(h, python);
         }
+        fleet
+    }
+
+    /// Starts an observer in host `host` (with its credentials when the
+    /// fleet has them) and reads what it writes from now on.
+    pub(crate) fn start_observer(&mut self, host: usize, python: &Path) {
+        let mut args = self.observer_args.clone();
+        if let Some(dir) = &self.credentials {
+            args.extend([
+                "--config".into(),
+                member_config(dir, &format!("observer-{host}")),
+            ]);
+        }
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let observer = Observer::start(&self.medium, host, python, &self.name, &args);
+        self.tails.push(observer.tail());
+        self.observers.push(observer);
     }
 
     /// Starts usv-i in host i where the mission file's scenario starts it,
@@ -166,6 +195,11 @@ impl Fleet {
                 })
                 .args(["--time-warp", &self.warp.to_string()])
                 .args(&self.vessel_args)
+                .args(
+                    self.credentials
+                        .iter()
+                        .flat_map(|dir| ["--zenoh-config".to_string(), member_config(dir, &p.id)]),
+                )
                 .env("RUST_LOG", "warn,seacover::agent::peer::node=info")
                 .stdin(Stdio::null())
                 .stdout(Stdio::null())

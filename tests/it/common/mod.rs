@@ -2,7 +2,8 @@
 //! ([`server`], [`process`]), the coordinator in this process
 //! ([`inprocess`]), vessel links ([`link`]), positions placed by
 //! geographiclib ([`geo`]), and network namespaces as a radio medium with
-//! the Python observer of peer fleets ([`netns`], [`peer`]), and ArduPilot
+//! the Python observer of peer fleets ([`netns`], [`peer`]) and what their
+//! encryption is judged by ([`secure`]), and ArduPilot
 //! SITL boats with a ground station on each ([`sitl`]), also each with its
 //! bridge in a namespace of its own on a medium ([`sitl_medium`]), and how
 //! still they are ([`sitl_quiet`]); the lock
@@ -22,6 +23,7 @@ pub(crate) mod paper;
 pub(crate) mod peer;
 pub(crate) mod process;
 pub(crate) mod schema;
+pub(crate) mod secure;
 pub(crate) mod server;
 pub(crate) mod sitl;
 pub(crate) mod sitl_medium;
