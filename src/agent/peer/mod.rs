@@ -9,8 +9,9 @@
 //! revision and answers queries for it ([`board`]), so a vessel that joins
 //! late gets it from any peer.
 //!
-//! Parts: [`wire`] (encoding and value rules), [`credentials`] (Zenoh's
-//! user/password authentication for a fleet), [`table`] (neighbours, ages,
+//! Parts: [`wire`] (encoding and value rules), [`credentials`] (a fleet's
+//! certificate authority and members, for Zenoh's mutual TLS), [`table`]
+//! (neighbours, ages,
 //! refusals), [`board`] (mission revisions), [`step`] (the loop on board),
 //! [`split`] (the plan both sides of a partition follow),
 //! [`session`] (Zenoh's configuration from the command line), [`node`]
