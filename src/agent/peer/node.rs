@@ -8,6 +8,9 @@
 //! read the table at their own ticks, so a burst of beacons never delays a
 //! hull's step.
 
+mod off_tick;
+mod status;
+
 use std::collections::BTreeMap;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -30,8 +33,8 @@ use crate::agent::VesselConfig;
 use crate::agent::onboard::Onboard;
 use crate::control::barrier::Scratch;
 use crate::control::guidance::Guidance;
-use crate::coverage::split::Water;
-use crate::protocol::peer::{PeerStatusDocument, SplitWater};
+use off_tick::OffTick;
+use status::status_document;
 
 /// What the fleet-wide declarations share with the vessels.
 struct Shared {
@@ -365,6 +368,8 @@ struct Declared {
     ahead_only: bool,
     /// The plan it follows while the fleet is split.
     split: Split,
+    /// The split plan being computed off the loop.
+    planning: OffTick,
     /// Since when (mission time) it has heard no other vessel and holds,
     /// while it does.
     alone: Option<f64>,
@@ -432,6 +437,7 @@ impl Declared {
             controlled: false,
             ahead_only: false,
             split: Split::default(),
+            planning: OffTick::default(),
             alone: None,
             joining: Some(Joining::START),
             outbox,
@@ -512,7 +518,8 @@ impl Declared {
     async fn answer(&self, shared: &Shared, query: zenoh::query::Query) {
         let with_belief = query.parameters().contains_key("belief");
         let mut doc = status_document(
-            shared,
+            &shared.table.lock().expect("table lock"),
+            &shared.config.ageing,
             &self.id,
             &self.current,
             self.controlled,
@@ -576,7 +583,7 @@ impl Declared {
             Instant::now(),
             ageing,
         );
-        let (orders, change) = self.split.update(&Tick {
+        let tick = Tick {
             mission: &rev.mission,
             revision: rev.revision,
             me: &self.id,
@@ -585,8 +592,18 @@ impl Declared {
             neighbours: &neighbours,
             ageing,
             t,
-        });
+        };
+        // A plan computed off the loop is taken on the first tick after it
+        // comes (`Split` drops it if its situation has passed); until then
+        // the vessel keeps clear of the silent ones as without a plan.
+        if let Some(planned) = self.planning.arrived(&self.id) {
+            self.split.accept(planned, &tick).log(&self.id, t);
+        }
+        let (orders, change, job) = self.split.look(&tick);
         change.log(&self.id, t);
+        if let Some(job) = job {
+            self.planning.spawn(job);
+        }
         // The other group stays an obstacle where it fell silent too, not
         // only where the plan has it: two boats lost at once look like a
         // partition, and a wreck does not follow the plan.
@@ -710,37 +727,6 @@ async fn run_vessel(
     }
     tracing::info!(vessel = %vessel.id, "peer vessel left");
     Ok(())
-}
-
-fn status_document(
-    shared: &Shared,
-    id: &str,
-    current: &Option<Arc<Revision>>,
-    controlled: bool,
-    partition: usize,
-    split: &Split,
-) -> PeerStatusDocument {
-    let table = shared.table.lock().expect("table lock");
-    let mut heard = table.ages(Instant::now(), &shared.config.ageing);
-    heard.remove(id);
-    PeerStatusDocument {
-        id: id.to_string(),
-        revision: current.as_ref().map(|r| r.revision),
-        controlled,
-        neighbours: partition,
-        heard,
-        refused: table.refused(),
-        quarantined: table.quarantined(),
-        received: table.received(),
-        split: split.others(),
-        split_water: split.water().map(|w| match w {
-            Water::Region => SplitWater::Region,
-            Water::Own => SplitWater::Own,
-        }),
-        alone: false,
-        partition_since: None,
-        learning: None,
-    }
 }
 
 /// Until a mission is held, and whenever a neighbour's beacon shows a

@@ -43,15 +43,29 @@
 //! lets it go (an island in the way), is not followed (today's rule then
 //! applies).
 //!
+//! ## Off the tick
+//! For a large group the plan takes longer than a tick (docs/performance.md,
+//! "The split plan"), so a vessel's loop computes it elsewhere: [`Split::look`]
+//! hands out a [`Job`] with owned copies of its inputs, taken when the split
+//! is seen, and [`Split::accept`] takes its [`Planned`] result on a later
+//! tick. The inputs do not depend on when the result comes, so both groups
+//! still compute one plan, and its clock's origin is the silence's, so a
+//! late result only finds the vessel behind its way (it steers to where the
+//! plan has it by now). Until then no orders: the silent vessels are
+//! obstacles where they fell silent, as without a plan. A result is dropped
+//! when the situation it was computed for has passed (another silence, the
+//! other group heard again, one of its own silent, a new revision). The
+//! unit tests check it against the plan computed on the tick.
+//!
 //! Pure: the mission time comes in, nothing goes out but the plan's
-//! orders.
+//! orders; the caller decides where a [`Job`] runs.
 
 use super::table::{Ageing, Neighbour};
 use crate::control::Vec3;
 use crate::control::model::State;
-use crate::coverage::Vessel;
-use crate::coverage::split::{self, SplitParams, SplitPlan, Water};
-use crate::geometry::{Point, norm2};
+use crate::coverage::split::{SplitParams, SplitPlan, Water, plan};
+use crate::coverage::{RiskField, Vessel};
+use crate::geometry::{Point, Region, norm2};
 use crate::mission::Mission;
 
 /// Neighbours that fell silent within this many seconds of each other
@@ -84,14 +98,8 @@ pub struct Orders {
 /// A plan being followed.
 #[derive(Debug, Clone)]
 struct Active {
-    revision: u32,
-    /// Both groups' ids in the plan's order.
-    ids: [Vec<String>; 2],
-    /// This vessel's group and place in it.
-    me: (usize, usize),
+    key: Key,
     plan: SplitPlan,
-    /// Mission time of τ = 0.
-    origin: f64,
     /// How far ahead on its way this vessel steers [s].
     lead: f64,
 }
@@ -117,6 +125,12 @@ pub enum Change {
     Ended {
         why: &'static str,
     },
+    /// A plan being computed off the tick for `others` (the situation
+    /// passed: `why`) will not be followed.
+    Dropped {
+        others: Vec<String>,
+        why: &'static str,
+    },
 }
 
 impl Change {
@@ -140,6 +154,10 @@ impl Change {
             Change::Ended { why } => {
                 tracing::info!(vessel = %id, t, why, "fleet split: plan ended")
             }
+            Change::Dropped { others, why } => tracing::info!(
+                vessel = %id, t, ?others, why,
+                "fleet split: the plan being computed is dropped"
+            ),
         }
     }
 }
@@ -161,19 +179,77 @@ pub struct Tick<'a> {
     pub t: f64,
 }
 
-/// One vessel's split: none, or the plan it follows.
+/// One vessel's split: none, the plan it follows, or the one being
+/// computed for it.
 #[derive(Debug, Default)]
 pub struct Split {
     active: Option<Active>,
+    /// The plan handed out as a [`Job`] and not yet accepted.
+    pending: Option<Key>,
+    /// Jobs handed out so far: a result is taken only for the last.
+    serial: u64,
     /// The other group of the last plan not followed: the same silence is
     /// not planned for again on every tick of its window.
     refused: Vec<String>,
 }
 
+/// What a plan is for: the situation it was computed in.
+#[derive(Debug, Clone, PartialEq)]
+struct Key {
+    serial: u64,
+    revision: u32,
+    /// Both groups' ids in the plan's order.
+    ids: [Vec<String>; 2],
+    /// This vessel's group and place in it.
+    me: (usize, usize),
+    /// Mission time of τ = 0.
+    origin: f64,
+}
+
+impl Key {
+    fn others(&self) -> &[String] {
+        &self.ids[1 - self.me.0]
+    }
+}
+
+/// A plan to compute, with owned copies of everything it needs: it can be
+/// moved to another thread and computed there ([`Job::compute`]).
+#[derive(Debug)]
+pub struct Job {
+    key: Key,
+    region: Region,
+    risk: RiskField,
+    groups: [Vec<Vessel>; 2],
+    params: SplitParams,
+}
+
+impl Job {
+    /// The plan (blocking: for a large group, longer than a tick).
+    pub fn compute(self) -> Planned {
+        let plan = plan(
+            &self.region,
+            &self.risk,
+            [&self.groups[0], &self.groups[1]],
+            &self.params,
+        );
+        Planned {
+            key: self.key,
+            plan,
+        }
+    }
+}
+
+/// A [`Job`]'s result, for [`Split::accept`].
+#[derive(Debug)]
+pub struct Planned {
+    key: Key,
+    plan: Option<SplitPlan>,
+}
+
 impl Split {
     /// The other group's ids while a plan is followed.
     pub fn others(&self) -> Option<Vec<String>> {
-        self.active.as_ref().map(|a| a.ids[1 - a.me.0].clone())
+        self.active.as_ref().map(|a| a.key.others().to_vec())
     }
 
     /// What this vessel's group covers while a plan is followed.
@@ -181,23 +257,86 @@ impl Split {
         self.active.as_ref().map(|a| a.plan.water)
     }
 
-    /// Looks at this tick: starts, keeps or ends a plan, and gives the
-    /// tick's orders while one is followed.
-    pub fn update(&mut self, tick: &Tick<'_>) -> (Option<Orders>, Change) {
-        let mut change = Change::None;
-        if let Some(active) = &self.active {
-            if let Some(why) = ended(active, tick.revision, tick.neighbours) {
-                self.active = None;
-                change = Change::Ended { why };
+    /// [`look`](Self::look) and [`accept`](Self::accept) in one, any plan
+    /// computed on the tick: what the off-tick path is checked against.
+    #[cfg(test)]
+    fn update(&mut self, tick: &Tick<'_>) -> (Option<Orders>, Change) {
+        let (orders, change, job) = self.look(tick);
+        match job {
+            Some(job) => {
+                let change = self.accept(job.compute(), tick);
+                (self.orders(tick.t), change)
             }
-        } else {
-            change = self.start(tick);
+            None => (orders, change),
         }
-        let orders = self.active.as_ref().map(|a| orders(a, tick.t));
-        (orders, change)
     }
 
-    fn start(&mut self, tick: &Tick<'_>) -> Change {
+    /// Looks at this tick: starts, keeps or ends a plan, and gives the
+    /// tick's orders while one is followed. A plan to start is handed out
+    /// as a [`Job`] to compute elsewhere and followed once its result is
+    /// [`accept`](Self::accept)ed; meanwhile there are no orders.
+    pub fn look(&mut self, tick: &Tick<'_>) -> (Option<Orders>, Change, Option<Job>) {
+        if let Some(active) = &self.active {
+            if let Some(why) = ended(&active.key, tick.revision, tick.neighbours) {
+                self.active = None;
+                return (None, Change::Ended { why }, None);
+            }
+            return (self.orders(tick.t), Change::None, None);
+        }
+        if let Some(key) = &self.pending
+            && let Some(why) = ended(key, tick.revision, tick.neighbours)
+        {
+            let others = key.others().to_vec();
+            self.pending = None;
+            return (None, Change::Dropped { others, why }, None);
+        }
+        (None, Change::None, self.start(tick))
+    }
+
+    /// Takes a [`Job`]'s result on this tick: follows it, refuses it, or
+    /// drops it when it is not the last job handed out or its situation
+    /// has passed.
+    pub fn accept(&mut self, planned: Planned, tick: &Tick<'_>) -> Change {
+        let Planned { key, plan } = planned;
+        if self.pending.as_ref() != Some(&key) {
+            return Change::None;
+        }
+        self.pending = None;
+        let others = key.others().to_vec();
+        if let Some(why) = ended(&key, tick.revision, tick.neighbours) {
+            return Change::Dropped { others, why };
+        }
+        let Some(plan) = plan else {
+            return Change::None;
+        };
+        let closest = plan.closest();
+        if ashore(&plan, tick.mission) || !plan.clear {
+            self.refused.clone_from(&others);
+            return Change::Refused { others, closest };
+        }
+        let speed = plan.speed;
+        let lead = if speed > 0.0 {
+            let lag = tick.mission.guidance().lag(speed);
+            if lag.is_finite() { lag / speed } else { 0.0 }
+        } else {
+            0.0
+        };
+        let (duration, water) = (plan.duration, plan.water);
+        self.active = Some(Active { key, plan, lead });
+        Change::Started {
+            others,
+            closest,
+            duration,
+            water,
+        }
+    }
+
+    fn orders(&self, t: f64) -> Option<Orders> {
+        self.active.as_ref().map(|a| orders(a, t))
+    }
+
+    /// The job for a split that starts on this tick, if one does.
+    fn start(&mut self, tick: &Tick<'_>) -> Option<Job> {
         let Tick {
             mission,
             revision,
@@ -219,7 +358,7 @@ impl Split {
         // of its group to be silent too; or long past (not a new split).
         if first < ageing.stale_after + TOGETHER || first > ageing.stale_after + 2.0 * TOGETHER {
             self.refused.clear();
-            return Change::None;
+            return None;
         }
         let others: Vec<&Neighbour> = neighbours
             .iter()
@@ -227,7 +366,7 @@ impl Split {
             .collect();
         let fresh: Vec<&Neighbour> = neighbours.iter().filter(|n| n.in_partition()).collect();
         if others.len() < 2 || fresh.is_empty() {
-            return Change::None;
+            return None;
         }
         // Own group in id order, this vessel among them.
         let mut mine: Vec<(String, Vessel)> = fresh.iter().map(|n| as_vessel(n)).collect();
@@ -241,8 +380,10 @@ impl Split {
         ));
         mine.sort_by(|a, b| a.0.cmp(&b.0));
         let theirs: Vec<(String, Vessel)> = others.iter().map(|n| as_vessel(n)).collect();
-        if theirs.iter().map(|(id, _)| id).eq(self.refused.iter()) {
-            return Change::None;
+        let same = |ids: &[String]| theirs.iter().map(|(id, _)| id).eq(ids.iter());
+        // Refused, or being computed: not again for the same silence.
+        if same(&self.refused) || self.pending.as_ref().is_some_and(|k| same(k.others())) {
+            return None;
         }
         // The group holding the least id first: both sides agree on it.
         let mine_first = mine[0].0 < theirs[0].0;
@@ -255,58 +396,40 @@ impl Split {
             .map(|g| g.iter().map(|(id, _)| id.clone()).collect::<Vec<_>>());
         let groups =
             [first_group, second_group].map(|g| g.iter().map(|(_, v)| *v).collect::<Vec<_>>());
-        let safety = mission.safety().barrier().safety_distance;
-        // Until the silent group is forgotten, every way keeps clear of
-        // where it fell silent as the filter will (the safety distance and
-        // the drift allowance, with the slack): they may be wrecks.
-        let params = SplitParams {
-            starts_kept: Some((safety + ageing.allowance + SLACK, ageing.forget_after)),
-            ..SplitParams::both(safety + 2.0 * SLACK, SPEED)
-        };
-        let Some(plan) = split::plan(
-            mission.region(),
-            mission.risk(),
-            [&groups[0], &groups[1]],
-            &params,
-        ) else {
-            return Change::None;
-        };
-        let closest = plan.closest();
-        let other_ids: Vec<String> = theirs.iter().map(|(id, _)| id.clone()).collect();
-        if ashore(&plan, mission) || !plan.clear {
-            self.refused.clone_from(&other_ids);
-            return Change::Refused {
-                others: other_ids,
-                closest,
-            };
-        }
         let g = usize::from(!mine_first);
         let i = ids[g]
             .iter()
             .position(|id| id == me)
             .expect("this vessel is in its group");
-        let speed = plan.speed;
-        let lead = if speed > 0.0 {
-            let lag = mission.guidance().lag(speed);
-            if lag.is_finite() { lag / speed } else { 0.0 }
-        } else {
-            0.0
-        };
-        let (duration, water) = (plan.duration, plan.water);
-        self.active = Some(Active {
+        self.serial += 1;
+        let key = Key {
+            serial: self.serial,
             revision,
             ids,
             me: (g, i),
-            plan,
             origin: t - (first - ageing.stale_after - TOGETHER),
-            lead,
-        });
-        Change::Started {
-            others: other_ids,
-            closest,
-            duration,
-            water,
-        }
+        };
+        self.pending = Some(key.clone());
+        Some(Job {
+            key,
+            region: mission.region().clone(),
+            risk: mission.risk().clone(),
+            groups,
+            params: params(mission, ageing),
+        })
+    }
+}
+
+/// The plan's parameters for `mission` under `ageing`: what every vessel
+/// plans with, so that both groups compute alike.
+pub fn params(mission: &Mission, ageing: &Ageing) -> SplitParams {
+    let safety = mission.safety().barrier().safety_distance;
+    // Until the silent group is forgotten, every way keeps clear of where
+    // it fell silent as the filter will (the safety distance and the drift
+    // allowance, with the slack): they may be wrecks.
+    SplitParams {
+        starts_kept: Some((safety + ageing.allowance + SLACK, ageing.forget_after)),
+        ..SplitParams::both(safety + 2.0 * SLACK, SPEED)
     }
 }
 
@@ -337,20 +460,20 @@ fn ashore(plan: &SplitPlan, mission: &Mission) -> bool {
     })
 }
 
-/// Why an active plan ends on this tick, if it does.
-fn ended(active: &Active, revision: u32, neighbours: &[Neighbour]) -> Option<&'static str> {
-    if revision != active.revision {
+/// Why a plan, followed or being computed, ends on this tick, if it does.
+fn ended(key: &Key, revision: u32, neighbours: &[Neighbour]) -> Option<&'static str> {
+    if revision != key.revision {
         return Some("a new mission revision");
     }
-    let (g, _) = active.me;
+    let (g, _) = key.me;
     let find = |id: &String| neighbours.iter().find(|n| &n.beacon.id == id);
-    if active.ids[1 - g]
+    if key.ids[1 - g]
         .iter()
         .any(|id| find(id).is_some_and(|n| n.silent.is_none()))
     {
         return Some("the other group is heard again");
     }
-    if active.ids[g]
+    if key.ids[g]
         .iter()
         .any(|id| find(id).is_some_and(|n| n.silent.is_some()))
     {
@@ -360,11 +483,11 @@ fn ended(active: &Active, revision: u32, neighbours: &[Neighbour]) -> Option<&'s
 }
 
 fn orders(active: &Active, t: f64) -> Orders {
-    let tau = t - active.origin;
-    let (g, i) = active.me;
+    let tau = t - active.key.origin;
+    let (g, i) = active.key.me;
     let plan = &active.plan;
     let o = 1 - g;
-    let others = active.ids[o]
+    let others = active.key.ids[o]
         .iter()
         .enumerate()
         .map(|(j, id)| {
@@ -389,238 +512,4 @@ fn orders(active: &Active, t: f64) -> Orders {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::agent::peer::table::Silent;
-    use crate::protocol::peer::BeaconDocument;
-
-    /// The paper fleet's joint optimum (Lloyd's iteration from the paper's
-    /// starts, `scripts/partition-offsets`), where test c splits it.
-    const AT: [(f64, f64); 8] = [
-        (75.479, 66.674),
-        (57.804, 74.267),
-        (69.269, 20.328),
-        (59.713, 36.028),
-        (50.381, 19.942),
-        (74.145, 83.567),
-        (23.738, 77.795),
-        (24.734, 61.582),
-    ];
-
-    fn neighbour(i: usize, age: Option<f64>) -> Neighbour {
-        let (x, y) = AT[i - 1];
-        Neighbour {
-            age: age.unwrap_or(0.1),
-            beacon: BeaconDocument {
-                id: format!("usv-{i}"),
-                seq: 0,
-                t: 0.0,
-                x,
-                y,
-                psi: 0.0,
-                u: 0.0,
-                v: 0.0,
-                r: 0.0,
-                k: 0.5,
-                beta: 0.001,
-                rev: 0,
-                controlled: true,
-            },
-            silent: age.map(|a| Silent { radius: 0.2 * a }),
-            quarantined: None,
-        }
-    }
-
-    fn own(i: usize) -> State {
-        let (x, y) = AT[i - 1];
-        State {
-            x,
-            y,
-            psi: 0.0,
-            vel: Vec3::zeros(),
-        }
-    }
-
-    /// What vessel `me` sees when `silent` fell silent `age` s ago (the
-    /// first of them; the others up to 0.4 s later) and the rest is fresh.
-    fn seen(me: usize, silent: &[usize], age: f64) -> Vec<Neighbour> {
-        (1..=8)
-            .filter(|&i| i != me)
-            .map(|i| {
-                let k = silent.iter().position(|&s| s == i);
-                neighbour(i, k.map(|k| age - 0.1 * k as f64))
-            })
-            .collect()
-    }
-
-    /// Vessel `me`'s tick on the paper mission at `t`.
-    fn tick<'a>(
-        mission: &'a Mission,
-        ageing: &'a Ageing,
-        me: &'a str,
-        own: &'a State,
-        neighbours: &'a [Neighbour],
-        t: f64,
-    ) -> Tick<'a> {
-        Tick {
-            mission,
-            revision: 0,
-            me,
-            own,
-            actuator: (0.5, 0.001),
-            neighbours,
-            ageing,
-            t,
-        }
-    }
-
-    /// Every vessel's planned place, from the orders of one vessel of each
-    /// group: its own target at the end, and the other group's places.
-    #[test]
-    fn both_sides_of_a_split_plan_the_same_places_and_heal() {
-        let mission = Mission::paper();
-        let ageing = Ageing::default();
-        let (a, b) = ([1, 2, 3, 4], [5, 6, 7, 8]);
-        let first = ageing.stale_after + TOGETHER + 0.05;
-        let late = 1000.0;
-        let mut places: [Vec<(String, Point)>; 2] = [Vec::new(), Vec::new()];
-        for (side, (me, silent)) in [(1, &b), (6, &a)].into_iter().enumerate() {
-            let mut split = Split::default();
-            let (id, at) = (format!("usv-{me}"), own(me));
-            let tick = |neighbours, t| tick(&mission, &ageing, &id, &at, neighbours, t);
-            let neighbours = seen(me, silent, first);
-            // Too early: the first has not been silent long enough.
-            let early = seen(me, silent, ageing.stale_after + 0.5);
-            let (orders, change) = split.update(&tick(&early, 10.0));
-            assert_eq!((orders, change), (None, Change::None));
-            let (orders, change) = split.update(&tick(&neighbours, 10.0));
-            let Change::Started {
-                others, closest, ..
-            } = change
-            else {
-                panic!("side {side}: {change:?}");
-            };
-            assert_eq!(others.len(), 4);
-            assert!(closest >= 9.0 - 1e-6, "{closest}");
-            assert!(orders.is_some());
-            // Long after, every vessel is at its place.
-            let (orders, _) = split.update(&tick(&neighbours, late));
-            let orders = orders.unwrap();
-            places[side].push((id.clone(), orders.target));
-            for (id, s) in &orders.others {
-                places[side].push((id.clone(), Point { x: s.x, y: s.y }));
-            }
-            // Healed: one of the other group heard again ends it.
-            let mut healed = neighbours.clone();
-            let k = healed.iter().position(|n| n.silent.is_some()).unwrap();
-            healed[k].silent = None;
-            let (orders, change) = split.update(&tick(&healed, late));
-            assert_eq!(orders, None);
-            assert!(matches!(change, Change::Ended { .. }), "{change:?}");
-            // Split again, then one of its own group falls silent: ended too.
-            split.update(&tick(&neighbours, 10.0));
-            assert!(split.others().is_some());
-            let mut lost = neighbours.clone();
-            let k = lost.iter().position(|n| n.silent.is_none()).unwrap();
-            lost[k].silent = Some(Silent { radius: 1.0 });
-            let (orders, change) = split.update(&tick(&lost, 20.0));
-            assert_eq!(orders, None);
-            assert!(matches!(change, Change::Ended { .. }), "{change:?}");
-        }
-        // usv-1 knows where usv-5…8 go, usv-6 where usv-1…4 go: each agrees
-        // with the other's own target, and both groups' places are apart.
-        let find = |side: usize, id: &str| places[side].iter().find(|(i, _)| i == id).unwrap().1;
-        for (side, id) in [(0, "usv-1"), (1, "usv-6")] {
-            let mine = find(side, id);
-            let theirs = find(1 - side, id);
-            assert!(
-                norm2(mine - theirs).sqrt() < 1e-6,
-                "{id}: {mine:?} / {theirs:?}"
-            );
-        }
-        for p in a {
-            for q in b {
-                let (p, q) = (find(1, &format!("usv-{p}")), find(0, &format!("usv-{q}")));
-                assert!(norm2(p - q).sqrt() >= 9.0 - 1e-6);
-            }
-        }
-    }
-
-    /// The paper fleet cut 5 | 3 at its joint optimum: no ways clear the
-    /// groups' own optima, so both sides keep to their own water, where
-    /// they are, and each knows the other stays.
-    #[test]
-    fn a_cut_without_clear_ways_keeps_each_group_to_its_own_water() {
-        let mission = Mission::paper();
-        let ageing = Ageing::default();
-        let first = ageing.stale_after + TOGETHER + 0.05;
-        let (a, b) = ([1, 2, 3, 4, 5], [6, 7, 8]);
-        for (me, silent) in [(2, &b[..]), (7, &a[..])] {
-            let mut split = Split::default();
-            let (id, at) = (format!("usv-{me}"), own(me));
-            let neighbours = seen(me, silent, first);
-            let (orders, change) =
-                split.update(&tick(&mission, &ageing, &id, &at, &neighbours, 10.0));
-            let Change::Started { water, closest, .. } = change else {
-                panic!("{id}: {change:?}");
-            };
-            assert_eq!(water, Water::Own, "{id}");
-            assert_eq!(split.water(), Some(Water::Own));
-            assert!(closest >= 9.0 - 1e-6, "{closest}");
-            let (orders_late, _) =
-                split.update(&tick(&mission, &ageing, &id, &at, &neighbours, 1000.0));
-            for o in [orders.unwrap(), orders_late.unwrap()] {
-                assert!(norm2(o.target - Point { x: at.x, y: at.y }).sqrt() < 0.05);
-                for (other, s) in &o.others {
-                    let i: usize = other[4..].parse().unwrap();
-                    let (x, y) = AT[i - 1];
-                    assert!((s.x - x).hypot(s.y - y) < 0.05, "{other}");
-                }
-            }
-        }
-    }
-
-    /// An island across the way a vessel would have to take: the plan is
-    /// refused (once per silence), and today's rule stays.
-    #[test]
-    fn an_island_in_the_way_refuses_the_plan() {
-        let mut doc = Mission::paper().document();
-        doc.region.holes = vec![vec![[38.0, 64.0], [46.0, 64.0], [46.0, 80.0], [38.0, 80.0]]];
-        let mission = Mission::from_document(&doc).expect("a valid mission");
-        let ageing = Ageing::default();
-        let first = ageing.stale_after + TOGETHER + 0.05;
-        let mut split = Split::default();
-        let at = own(1);
-        let neighbours = seen(1, &[5, 6, 7, 8], first);
-        let (orders, change) =
-            split.update(&tick(&mission, &ageing, "usv-1", &at, &neighbours, 10.0));
-        assert_eq!(orders, None);
-        // Refused for the island: the ways keep clear of each other.
-        let Change::Refused { closest, .. } = change else {
-            panic!("{change:?}");
-        };
-        assert!(closest >= 9.0 - 1e-6, "{closest}");
-        // The same silence on the next tick: not planned for again.
-        let (orders, change) =
-            split.update(&tick(&mission, &ageing, "usv-1", &at, &neighbours, 10.1));
-        assert_eq!((orders, change), (None, Change::None));
-    }
-
-    /// One silent neighbour is a dead boat, not a group: no plan; nor when
-    /// this vessel hears nobody else (a lone vessel cut off).
-    #[test]
-    fn a_lone_silence_or_a_lone_vessel_makes_no_plan() {
-        let mission = Mission::paper();
-        let ageing = Ageing::default();
-        let first = ageing.stale_after + TOGETHER + 0.05;
-        let mut split = Split::default();
-        let at = own(1);
-        let one = seen(1, &[5], first);
-        let (orders, change) = split.update(&tick(&mission, &ageing, "usv-1", &at, &one, 10.0));
-        assert_eq!((orders, change), (None, Change::None));
-        let alone = seen(1, &[2, 3, 4, 5, 6, 7, 8], first);
-        let (orders, change) = split.update(&tick(&mission, &ageing, "usv-1", &at, &alone, 10.0));
-        assert_eq!((orders, change), (None, Change::None));
-        assert_eq!(split.others(), None);
-    }
-}
+mod tests;
