@@ -33,6 +33,8 @@
 //! `cargo bench --bench peer`; numbers in docs/performance.md ("One
 //! vessel's tick in a peer fleet").
 
+mod common;
+
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 
@@ -49,12 +51,7 @@ use seacover::coverage::range::{local_cell, relevant};
 use seacover::coverage::{CellGeometry, Options, Vessel};
 use seacover::geometry::{Point, norm2};
 use seacover::mission::Mission;
-use seacover::protocol::{RegionDocument, RiskDocument, RiskObjectDocument};
 
-/// The paper's density: 8 vessels on 100 m × 100 m.
-const AREA_PER_VESSEL: f64 = 100.0 * 100.0 / 8.0;
-/// And its risk objects: 3 for 8 vessels.
-const OBJECTS_PER_VESSEL: f64 = 3.0 / 8.0;
 const FLEET: &str = "bench";
 /// The fleet sizes: the issue's 100 and 1000, and 10 000 to see the trend.
 const SIZES: [usize; 3] = [100, 1000, 10_000];
@@ -89,26 +86,8 @@ fn vessel_of(x: f64, y: f64, (k, beta): (f64, f64)) -> Vessel {
 
 fn node(n: usize, seed: u64) -> Node {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-    let side = (n as f64 * AREA_PER_VESSEL).sqrt();
-    let objects = (n as f64 * OBJECTS_PER_VESSEL).round() as usize;
-    let mut doc = Mission::paper().document();
-    doc.region = RegionDocument {
-        polygon: vec![[0.0, 0.0], [side, 0.0], [side, side], [0.0, side]],
-        holes: vec![],
-    };
-    doc.risk = RiskDocument {
-        base: 0.1,
-        objects: (0..objects)
-            .map(|_| RiskObjectDocument {
-                id: None,
-                x: rng.random_range(0.0..side),
-                y: rng.random_range(0.0..side),
-                alpha: rng.random_range(6.0..14.0),
-                sigma: 10.0,
-            })
-            .collect(),
-    };
-    let mission = Mission::from_document(&doc).expect("a valid mission");
+    let side = common::side(n);
+    let mission = common::dense_mission(n, &mut rng);
     let actuator = wire::wire_actuator(mission.actuator().k, mission.actuator().beta);
     let states: Vec<State> = (0..n)
         .map(|_| {
@@ -226,7 +205,7 @@ fn peer(c: &mut Criterion) {
         eprintln!(
             "peer/{n}: {:.1} m square, {} risk objects; the node hears {} vessels, \
              {} of them within r_i + r_j",
-            (n as f64 * AREA_PER_VESSEL).sqrt(),
+            common::side(n),
             m.risk().objects().len(),
             node.neighbours.len(),
             node.in_reach.len(),

@@ -16,6 +16,8 @@
 //! `cargo bench --bench split`; numbers in docs/performance.md ("The split
 //! plan").
 
+mod common;
+
 use std::hint::black_box;
 use std::time::Duration;
 
@@ -27,12 +29,7 @@ use seacover::coverage::split::plan;
 use seacover::coverage::{Fleet, Options, Vessel, evaluate};
 use seacover::geometry::{Point, norm2};
 use seacover::mission::Mission;
-use seacover::protocol::{RegionDocument, RiskDocument, RiskObjectDocument};
 
-/// The paper's density: 8 vessels on 100 m × 100 m.
-const AREA_PER_VESSEL: f64 = 100.0 * 100.0 / 8.0;
-/// And its risk objects: 3 for 8 vessels.
-const OBJECTS_PER_VESSEL: f64 = 3.0 / 8.0;
 /// Both groups' sizes.
 const CUTS: [(usize, usize); 2] = [(4, 4), (25, 25)];
 
@@ -41,32 +38,13 @@ fn mission(n: usize, rng: &mut rand_chacha::ChaCha8Rng) -> Mission {
     if n == 8 {
         return Mission::paper();
     }
-    let side = (n as f64 * AREA_PER_VESSEL).sqrt();
-    let objects = (n as f64 * OBJECTS_PER_VESSEL).round() as usize;
-    let mut doc = Mission::paper().document();
-    doc.region = RegionDocument {
-        polygon: vec![[0.0, 0.0], [side, 0.0], [side, side], [0.0, side]],
-        holes: vec![],
-    };
-    doc.risk = RiskDocument {
-        base: 0.1,
-        objects: (0..objects)
-            .map(|_| RiskObjectDocument {
-                id: None,
-                x: rng.random_range(0.0..side),
-                y: rng.random_range(0.0..side),
-                alpha: rng.random_range(6.0..14.0),
-                sigma: 10.0,
-            })
-            .collect(),
-    };
-    Mission::from_document(&doc).expect("a valid mission")
+    common::dense_mission(n, rng)
 }
 
 /// `n` vessels on a jittered grid over the mission's square, then at the
 /// whole fleet's optimum (Lloyd's iteration to 1 mm).
 fn at_optimum(m: &Mission, n: usize, rng: &mut rand_chacha::ChaCha8Rng) -> Vec<Vessel> {
-    let side = (n as f64 * AREA_PER_VESSEL).sqrt();
+    let side = common::side(n);
     let cols = (n as f64).sqrt().ceil() as usize;
     let rows = n.div_ceil(cols);
     let (w, h) = (side / cols as f64, side / rows as f64);
@@ -124,7 +102,7 @@ fn split_plan(c: &mut Criterion) {
         eprintln!(
             "split-plan/{a}|{b}: {:.1} m square; water {:?}, clear {}, closest {:.2} m, \
              duration {:.0} s",
-            (n as f64 * AREA_PER_VESSEL).sqrt(),
+            common::side(n),
             p.water,
             p.clear,
             p.closest(),
