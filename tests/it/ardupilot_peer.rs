@@ -30,10 +30,11 @@
 //!
 //! Durations of the boats' world are on ArduPilot's clock, at SITL's
 //! [`SPEEDUP`] as in ardupilot_sitl. The bridges have no time warp
-//! (`--mavlink` takes none): their loop ticks at 10 Hz and beacons age on
-//! the wall clock, so at speedup 4 a boat gets a command every 0.4 s of its
-//! own clock, and a silent neighbour leaves the others' partition after
-//! 3 s of wall clock, 12 s of the boats'. The test collects its checks,
+//! (`--mavlink` takes none): their loop steps once per mission tick of the
+//! autopilot's own clock (its poses' time, `Member::link`), so a boat gets
+//! a command every 0.1 s of its clock, but beacons age on the wall clock,
+//! so a silent neighbour leaves the others' partition after 3 s of wall
+//! clock, 12 s of the boats' at speedup 4. The test collects its checks,
 //! prints one summary with its numbers, and then fails listing every check
 //! that did not hold.
 
