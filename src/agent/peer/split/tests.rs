@@ -2,7 +2,6 @@
 
 use super::*;
 use crate::agent::peer::table::Silent;
-use crate::protocol::peer::BeaconDocument;
 
 /// The paper fleet's joint optimum (Lloyd's iteration from the paper's
 /// starts, `scripts/partition-offsets`), where test c splits it.
@@ -21,21 +20,7 @@ fn neighbour(i: usize, age: Option<f64>) -> Neighbour {
     let (x, y) = AT[i - 1];
     Neighbour {
         age: age.unwrap_or(0.1),
-        beacon: BeaconDocument {
-            id: format!("usv-{i}"),
-            seq: 0,
-            t: 0.0,
-            x,
-            y,
-            psi: 0.0,
-            u: 0.0,
-            v: 0.0,
-            r: 0.0,
-            k: 0.5,
-            beta: 0.001,
-            rev: 0,
-            controlled: true,
-        },
+        beacon: crate::agent::peer::table::tests::doc(&format!("usv-{i}"), 0.0, (x, y), 0.0, 0.0),
         silent: age.map(|a| Silent { radius: 0.2 * a }),
         quarantined: None,
     }

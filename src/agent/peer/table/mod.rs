@@ -501,4 +501,4 @@ fn age(h: &Heard, now: Instant, ageing: &Ageing) -> f64 {
 }
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;

@@ -5,8 +5,8 @@ use super::*;
 use std::time::Duration;
 
 /// A beacon of the paper's actuator at (x, y), heading `psi`, at `u`
-/// m/s.
-fn doc(id: &str, t: f64, (x, y): (f64, f64), psi: f64, u: f64) -> BeaconDocument {
+/// m/s (the split's tests take theirs from here too).
+pub(crate) fn doc(id: &str, t: f64, (x, y): (f64, f64), psi: f64, u: f64) -> BeaconDocument {
     BeaconDocument {
         id: id.into(),
         seq: 1,
