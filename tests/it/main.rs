@@ -39,6 +39,7 @@ mod peer_fleet;
 mod peer_learning;
 mod peer_medium;
 mod peer_partition;
+mod peer_scale;
 mod peer_trust;
 mod persistence;
 mod properties;

@@ -49,6 +49,7 @@ use std::time::{Duration, Instant};
 use crate::common::fleet::*;
 use crate::common::paper::*;
 use crate::common::peer::{now, wait_for};
+use crate::common::range::Range;
 use crate::common::secure::{Capture, cpu_seconds, needles};
 use serde_json::Value;
 
@@ -210,7 +211,8 @@ fn f_a_member_whose_clock_is_two_seconds_off() {
     let closest = check_safety(&mut checks, &fleet, safety);
     // How far ahead of its arrival each vessel's beacons are stamped (the
     // median, in wall seconds).
-    let ahead: BTreeMap<String, f64> = Fleet::ids()
+    let ahead: BTreeMap<String, f64> = fleet
+        .ids()
         .into_iter()
         .map(|id| {
             let mut d: Vec<f64> = fleet
@@ -391,17 +393,6 @@ fn e_range_limited_radio() {
             Setup::new(&format!("e{range}"), WARP).status_every(0.5),
             &python,
         );
-        let out_of_range = |at: &[Pos]| -> BTreeSet<(usize, usize)> {
-            let mut pairs = BTreeSet::new();
-            for a in 0..at.len() {
-                for b in a + 1..at.len() {
-                    if (at[a].x - at[b].x).hypot(at[a].y - at[b].y) > range {
-                        pairs.insert((a + 1, b + 1));
-                    }
-                }
-            }
-            pairs
-        };
         // The fleet forms as boats leaving one harbour do, every pair in
         // range (Zenoh's links open; they then outlive a cut by the lease,
         // PEER_LEASE_MS); from then on the medium cuts by range. A pair
@@ -412,30 +403,14 @@ fn e_range_limited_radio() {
         fleet.wait_heard_all();
         fleet.wait_formed(30.0);
         let safety = fleet.safety_distance();
-        let mut cut = out_of_range(&fleet.positions());
-        fleet
-            .medium
-            .cut_pairs(&cut.iter().copied().collect::<Vec<_>>());
-        let (mut ever, mut most, mut updates) = (cut.clone(), cut.len(), 0usize);
-        let mut last = Instant::now();
-        let mut slowest = Duration::ZERO;
-        let period = Duration::from_secs_f64(0.5 / WARP);
-        fleet.run_until(run, |f| {
-            if last.elapsed() < period {
-                return;
-            }
-            slowest = slowest.max(last.elapsed());
-            last = Instant::now();
-            let now_cut = out_of_range(&f.positions());
-            if now_cut != cut {
-                f.medium
-                    .cut_pairs(&now_cut.iter().copied().collect::<Vec<_>>());
-                updates += 1;
-                most = most.max(now_cut.len());
-                ever.extend(now_cut.iter().copied());
-                cut = now_cut;
-            }
-        });
+        let mut radio = Range::start(
+            &fleet,
+            &fleet.positions(),
+            range,
+            Duration::from_secs_f64(0.5 / WARP),
+        );
+        fleet.run_until(run, |f| radio.follow(f));
+        let (ever, most, updates, slowest) = (radio.ever, radio.most, radio.updates, radio.slowest);
         // Stopped before anything is read: the range model stops with the
         // run, and vessels left running would go on moving through a
         // medium frozen as the run left it, deaf to pairs that have since

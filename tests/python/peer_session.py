@@ -46,4 +46,9 @@ def make_config(args):
     if args.listen:
         config.insert_json5("listen/endpoints", json.dumps(args.listen))
     config.insert_json5("scouting/multicast/enabled", json.dumps(not args.no_multicast))
+    # As seacover's members (src/agent/peer/session.rs, GOSSIP): found by
+    # multicast scouting alone, no gossip, which would have the tool try to
+    # link with every member it hears of, out of radio range too.
+    if json.loads(config.get_json("connect/endpoints")) in ([], None):
+        config.insert_json5("scouting/gossip/enabled", "false")
     return config

@@ -148,6 +148,22 @@ pub struct PeerStatusDocument {
     /// What it learned of the risk field, when its fleet learns.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub learning: Option<PeerLearningDocument>,
+    /// How long its loop's recent steps took (`null` before its first
+    /// step with a mission).
+    #[serde(default)]
+    pub step_time: Option<StepTimeDocument>,
+}
+
+/// The wall time of a vessel's recent steps on board (its cell, centroid,
+/// safety filter and controller; docs/peer.md, "A hundred vessels").
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct StepTimeDocument {
+    /// Steps measured: the newest, at most 100.
+    pub steps: u32,
+    /// Their median [ms].
+    pub median_ms: f64,
+    /// The longest of them [ms].
+    pub max_ms: f64,
 }
 
 /// A peer vessel's learner (docs/learning.md, "In a peer fleet").

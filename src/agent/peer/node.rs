@@ -10,6 +10,7 @@
 
 mod off_tick;
 mod status;
+mod step_times;
 
 use std::collections::BTreeMap;
 use std::sync::{Arc, Mutex};
@@ -35,6 +36,7 @@ use crate::control::barrier::Scratch;
 use crate::control::guidance::Guidance;
 use off_tick::OffTick;
 use status::status_document;
+use step_times::StepTimes;
 
 /// What the fleet-wide declarations share with the vessels.
 struct Shared {
@@ -378,6 +380,8 @@ struct Declared {
     joining: Option<Joining>,
     /// Its samples' publisher, when the fleet learns.
     outbox: Option<Outbox>,
+    /// How long its newest steps with a mission took.
+    step_times: StepTimes,
 }
 
 impl Declared {
@@ -441,6 +445,7 @@ impl Declared {
             alone: None,
             joining: Some(Joining::START),
             outbox,
+            step_times: StepTimes::default(),
         })
     }
 
@@ -528,6 +533,7 @@ impl Declared {
         );
         doc.alone = self.alone.is_some();
         doc.partition_since = (self.partition_since > 0.0).then_some(self.partition_since);
+        doc.step_time = self.step_times.document();
         if let Some(l) = &shared.learning {
             doc.learning = Some(l.document(with_belief));
             for (why, n) in l.refused() {
@@ -555,8 +561,22 @@ impl Declared {
     }
 
     /// One tick of the loop on board at mission time `t`; `None` without a
-    /// mission (the vessel then holds).
+    /// mission (the vessel then holds). Timed for its status.
     fn step(
+        &mut self,
+        shared: &Shared,
+        own: &crate::control::model::State,
+        t: f64,
+    ) -> Option<crate::protocol::CommandDocument> {
+        let started = Instant::now();
+        let command = self.steer(shared, own, t);
+        if self.current.is_some() {
+            self.step_times.record(started.elapsed());
+        }
+        command
+    }
+
+    fn steer(
         &mut self,
         shared: &Shared,
         own: &crate::control::model::State,

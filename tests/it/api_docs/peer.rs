@@ -352,6 +352,11 @@ fn the_peer_wire_schema_accepts_the_real_documents() {
             split_water: revision.map(|_| seacover::protocol::peer::SplitWater::Own),
             alone: revision.is_none(),
             learning: None,
+            step_time: revision.map(|_| seacover::protocol::peer::StepTimeDocument {
+                steps: 100,
+                median_ms: 0.42,
+                max_ms: 3.1,
+            }),
         })
         .unwrap()
     };

@@ -29,7 +29,7 @@ pub(crate) struct Setup {
     /// Makes the fleet's name unique; names the test in messages.
     pub tag: String,
     pub warp: f64,
-    /// 1: an observer in host 0; 2: and one in host N + 1.
+    /// 1: an observer in host 0; 2: and one in host n + 1.
     pub observers: usize,
     pub observer_args: Vec<String>,
     pub vessel_args: Vec<String>,
@@ -47,6 +47,8 @@ pub(crate) struct Setup {
     /// The fleet's credentials (`seacover fleet credentials`: mutual TLS
     /// over QUIC datagrams) for every vessel and observer.
     pub credentials: bool,
+    /// Wall time between two vessels' starts [s] (0: all at once).
+    pub launch_every: f64,
 }
 
 impl Setup {
@@ -62,6 +64,7 @@ impl Setup {
             mission: PAPER,
             clock_off: None,
             credentials: false,
+            launch_every: 0.0,
         }
     }
 
@@ -89,6 +92,9 @@ pub(crate) struct Approach {
 
 pub(crate) struct Fleet {
     pub name: String,
+    /// The vessels: the mission file's scenario's, usv-1 … usv-n in hosts
+    /// 1 … n.
+    pub n: usize,
     pub warp: f64,
     /// UTC when the vessels were started.
     pub started: f64,
@@ -98,6 +104,7 @@ pub(crate) struct Fleet {
     pub clock_off: Option<(String, String)>,
     /// The credentials' directory, with [`Setup::credentials`].
     pub credentials: Option<PathBuf>,
+    pub launch_every: f64,
     /// The observers' flags (each adds its own credentials).
     pub observer_args: Vec<String>,
     /// The shore process's host, with [`Setup::shore`].
@@ -121,20 +128,22 @@ pub(crate) struct Fleet {
 }
 
 impl Fleet {
-    /// The medium (hosts 0 … N, and N + 1 with a second observer) and the
+    /// The medium (hosts 0 … n, and n + 1 with a second observer) and the
     /// observers, ready; no vessel yet ([`Fleet::launch`]).
     pub(crate) fn new(setup: Setup, python: &Path) -> Fleet {
         let heavy = super::machine::heavy();
-        let hosts = N + setup.observers + usize::from(setup.shore);
+        let n = starts_in(&scenario(setup.mission)).len();
+        let hosts = n + setup.observers + usize::from(setup.shore);
         let medium = Medium::new(hosts);
         let name = format!("pf{}{}", std::process::id(), setup.tag);
         let logs = tempfile::tempdir().unwrap();
-        let observer_hosts = [0, N + 1];
+        let observer_hosts = [0, n + 1];
         let credentials = setup
             .credentials
             .then(|| credentials(logs.path(), &name, &observer_hosts));
         let mut fleet = Fleet {
             name,
+            n,
             warp: setup.warp,
             started: 0.0,
             vessel_args: setup.vessel_args,
@@ -142,6 +151,7 @@ impl Fleet {
             mission: setup.mission,
             clock_off: setup.clock_off,
             credentials,
+            launch_every: setup.launch_every,
             observer_args: setup.observer_args,
             shore: setup.shore.then_some(hosts - 1),
             vessels: Vec::new(),
@@ -182,6 +192,9 @@ impl Fleet {
     pub(crate) fn launch(&mut self) {
         self.started = now();
         for (i, p) in starts_in(&scenario(self.mission)).iter().enumerate() {
+            if i > 0 {
+                sleep(Duration::from_secs_f64(self.launch_every));
+            }
             let host = i + 1;
             let log = self.logs.path().join(format!("{}.log", p.id));
             let mut cmd = self.medium.command(host, BIN);
@@ -275,8 +288,8 @@ impl Fleet {
         }
     }
 
-    pub(crate) fn ids() -> Vec<String> {
-        (1..=N).map(|i| format!("usv-{i}")).collect()
+    pub(crate) fn ids(&self) -> Vec<String> {
+        (1..=self.n).map(|i| format!("usv-{i}")).collect()
     }
 
     /// The least mission time among the running vessels (all before the
@@ -284,7 +297,7 @@ impl Fleet {
     /// unheard).
     pub(crate) fn mission_time(&self) -> f64 {
         let ids = if self.vessels.is_empty() {
-            Fleet::ids()
+            self.ids()
         } else {
             self.vessels.iter().map(|v| v.id.clone()).collect()
         };
@@ -329,10 +342,24 @@ impl Fleet {
     /// Waits until the observers have heard every vessel.
     pub(crate) fn wait_heard_all(&mut self) -> f64 {
         let from = now();
-        wait_for(30.0, "the observers hear all 8 vessels", || {
+        // A hundred processes take a while to start and find each other.
+        let deadline = Instant::now() + Duration::from_secs_f64(30.0 + 0.3 * self.n as f64);
+        loop {
             self.update();
-            (self.latest.len() >= N).then_some(())
-        });
+            if self.latest.len() >= self.n {
+                break;
+            }
+            assert!(
+                Instant::now() < deadline,
+                "{}: the observers heard {} of the {} vessels after {:.0} s: {:?}",
+                self.name,
+                self.latest.len(),
+                self.n,
+                now() - from,
+                self.latest.keys().collect::<Vec<_>>()
+            );
+            sleep(Duration::from_millis(100));
+        }
         now() - from
     }
 
@@ -353,25 +380,23 @@ impl Fleet {
     /// partition (needs status queries); returns how long that took.
     pub(crate) fn wait_formed(&mut self, secs: f64) -> f64 {
         let from = now();
-        wait_for(
-            secs,
-            "every vessel has the 7 others in its partition",
-            || {
-                self.update();
-                let newest = self.newest_statuses(from);
-                (newest.len() == N
-                    && newest
-                        .values()
-                        .all(|s| s["status"]["neighbours"].as_u64() == Some(N as u64 - 1)))
-                .then_some(())
-            },
-        );
+        let n = self.n;
+        let what = format!("every vessel has the {} others in its partition", n - 1);
+        wait_for(secs, &what, || {
+            self.update();
+            let newest = self.newest_statuses(from);
+            (newest.len() == n
+                && newest
+                    .values()
+                    .all(|s| s["status"]["neighbours"].as_u64() == Some(n as u64 - 1)))
+            .then_some(())
+        });
         now() - from
     }
 
     /// The vessels' newest positions, in id order.
     pub(crate) fn positions(&self) -> Vec<Pos> {
-        Fleet::ids()
+        self.ids()
             .iter()
             .map(|id| {
                 let b = &self
@@ -568,7 +593,7 @@ impl Fleet {
 
     /// Each vessel's bytes on its link: (received, transmitted), host i.
     pub(crate) fn bytes(&self) -> Vec<(u64, u64)> {
-        (1..=N).map(|i| self.medium.bytes(i)).collect()
+        (1..=self.n).map(|i| self.medium.bytes(i)).collect()
     }
 
     /// SIGTERM to every vessel: each must exit 0 within 15 s. With

@@ -22,6 +22,7 @@ pub(crate) mod netns;
 pub(crate) mod paper;
 pub(crate) mod peer;
 pub(crate) mod process;
+pub(crate) mod range;
 pub(crate) mod schema;
 pub(crate) mod secure;
 pub(crate) mod server;

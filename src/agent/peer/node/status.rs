@@ -11,7 +11,7 @@ use crate::coverage::split::Water;
 use crate::protocol::peer::{PeerStatusDocument, SplitWater};
 
 /// Vessel `id`'s status, before the fields only its loop knows (`alone`,
-/// `partition_since`, `learning`).
+/// `partition_since`, `learning`, `step_time`).
 pub(super) fn status_document(
     table: &Table,
     ageing: &Ageing,
@@ -40,5 +40,6 @@ pub(super) fn status_document(
         alone: false,
         partition_since: None,
         learning: None,
+        step_time: None,
     }
 }
