@@ -37,7 +37,7 @@ use crate::common::paper::{
 };
 use crate::common::peer::now;
 use crate::common::range::Range;
-use crate::common::secure::cpu_seconds;
+use crate::common::secure::{cpu_seconds, rss};
 
 /// The radio's range [m].
 const RANGE: f64 = 300.0;
@@ -214,7 +214,10 @@ fn fleet_of(n: usize, dir: &Path, python: &Path, checks: &mut Checks) -> Row {
     sleep(Duration::from_secs_f64(WINDOW));
     let after = measure(&fleet);
     let pids: Vec<u32> = fleet.vessels.iter().map(|v| v.child.0.id()).collect();
-    let rss: Vec<f64> = pids.iter().map(|&p| rss_mb(p)).collect();
+    let rss: Vec<f64> = pids
+        .iter()
+        .map(|&p| rss(p).map_or(f64::NAN, |b| b as f64 / (1024.0 * 1024.0)))
+        .collect();
     // Per second of mission time: what a vessel in real time would use.
     let rate = |k: usize| -> Vec<f64> {
         before
@@ -357,16 +360,6 @@ fn measure(fleet: &Fleet) -> Vec<[f64; 4]> {
             [now(), cpu_seconds(v.child.0.id()), rx as f64, tx as f64]
         })
         .collect()
-}
-
-/// A process's resident memory [MB].
-fn rss_mb(pid: u32) -> f64 {
-    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).unwrap_or_default();
-    status
-        .lines()
-        .find_map(|l| l.strip_prefix("VmRSS:"))
-        .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<f64>().ok())
-        .map_or(f64::NAN, |kb| kb / 1024.0)
 }
 
 /// The mission for `n` vessels at [`DENSITY`]: a square, the paper's

@@ -37,6 +37,7 @@ use std::time::{Duration, Instant};
 use serde_json::Value;
 
 use crate::common::process::KillOnDrop;
+use crate::common::secure::rss;
 use crate::common::server::{get_json, metric_sum, metrics, start};
 
 const BIN: &str = env!("CARGO_BIN_EXE_seacover");
@@ -65,20 +66,6 @@ struct Sample {
     /// Bytes and number of the recordings on disk.
     disk: u64,
     files: usize,
-}
-
-/// `VmRSS` of process `pid` in bytes.
-fn rss(pid: u32) -> Option<u64> {
-    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
-    let kb: u64 = status
-        .lines()
-        .find_map(|l| l.strip_prefix("VmRSS:"))?
-        .trim()
-        .trim_end_matches("kB")
-        .trim()
-        .parse()
-        .ok()?;
-    Some(kb * 1024)
 }
 
 /// The `.mcap` files in `dir`, sorted, with their total size.

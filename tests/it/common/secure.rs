@@ -1,7 +1,8 @@
 //! What a peer fleet's encryption is judged by: credentials for a test
 //! fleet (the real `seacover fleet credentials`), what a receiver on the
 //! medium reads (tests/python/capture.py in the medium's namespace), and
-//! the CPU time a process used (its `/proc/<pid>/stat`).
+//! the CPU time and memory a process used (its `/proc/<pid>/stat` and
+//! `status`).
 
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
@@ -107,6 +108,20 @@ pub(crate) fn needles(fleet: &str) -> Vec<String> {
         "\"neighbours\"".to_string(),
     ]);
     n
+}
+
+/// `VmRSS` of process `pid` in bytes.
+pub(crate) fn rss(pid: u32) -> Option<u64> {
+    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
+    let kb: u64 = status
+        .lines()
+        .find_map(|l| l.strip_prefix("VmRSS:"))?
+        .trim()
+        .trim_end_matches("kB")
+        .trim()
+        .parse()
+        .ok()?;
+    Some(kb * 1024)
 }
 
 /// The CPU time process `pid` has used, user and system [s].
