@@ -8,6 +8,7 @@
 //! read the table at their own ticks, so a burst of beacons never delays a
 //! hull's step.
 
+mod listen;
 mod off_tick;
 mod status;
 mod step_times;
@@ -19,7 +20,6 @@ use std::time::{Duration, Instant};
 use tokio::sync::watch;
 use tokio_util::sync::CancellationToken;
 use tokio_util::task::TaskTracker;
-use zenoh::Wait;
 use zenoh::qos::CongestionControl;
 use zenoh::query::ConsolidationMode;
 
@@ -137,6 +137,18 @@ pub struct Member {
     shared: Arc<Shared>,
 }
 
+impl listen::Listener for Shared {
+    fn on_beacon(&self, key: &str, bytes: &[u8]) {
+        Shared::on_beacon(self, key, bytes);
+    }
+    fn offer_mission(&self, bytes: &[u8]) {
+        Shared::offer_mission(self, bytes);
+    }
+    fn current_mission(&self) -> Option<Arc<Revision>> {
+        self.board.lock().expect("board lock").current()
+    }
+}
+
 impl std::fmt::Debug for Member {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Member")
@@ -178,33 +190,7 @@ impl Member {
             shared.offer_mission(&bytes);
         }
         tracing::info!(fleet = %config.fleet, zid = %session.zid(), "joined the peer fleet");
-        let s = shared.clone();
-        session
-            .declare_subscriber(Keys::all_beacons())
-            .callback(move |sample| {
-                s.on_beacon(sample.key_expr().as_str(), &sample.payload().to_bytes());
-            })
-            .background()
-            .await
-            .map_err(zerr)?;
-        let s = shared.clone();
-        session
-            .declare_subscriber(keys.mission())
-            .callback(move |sample| s.offer_mission(&sample.payload().to_bytes()))
-            .background()
-            .await
-            .map_err(zerr)?;
-        let s = shared.clone();
-        let mission_key = keys.mission();
-        session
-            .declare_queryable(keys.mission())
-            .callback(move |query| {
-                let current = s.board.lock().expect("board lock").current();
-                if let Some(rev) = current {
-                    let _ = query.reply(&mission_key, rev.json.as_slice()).wait();
-                }
-            })
-            .background()
+        listen::declare(&session, &shared, &keys)
             .await
             .map_err(zerr)?;
         tasks.spawn(ask_while_behind(

@@ -80,6 +80,13 @@ impl Keys {
     pub fn beacon(&self, id: &str) -> String {
         format!("seacover/{}/beacon/{id}", self.fleet)
     }
+    /// The fleet's own beacons. Subscribed to apart from every fleet's:
+    /// a link then names a beacon by the fleet's declared prefix and the
+    /// id alone (`/usv-1`), not by its whole key, ~20 bytes of a ~120-byte
+    /// frame (docs/peer.md, "Radio budgets").
+    pub fn beacons(&self) -> String {
+        format!("seacover/{}/beacon/*", self.fleet)
+    }
     /// Every fleet's beacons: a node hears them all so that it can count
     /// (and ignore) another fleet's.
     pub fn all_beacons() -> &'static str {
