@@ -49,6 +49,9 @@ pub(crate) struct Setup {
     pub credentials: bool,
     /// Wall time between two vessels' starts [s] (0: all at once).
     pub launch_every: f64,
+    /// The test holds the machine ([`super::machine::heavy`]) for this
+    /// fleet and another that runs beside it; the fleet does not take it.
+    pub machine_held: bool,
 }
 
 impl Setup {
@@ -65,6 +68,7 @@ impl Setup {
             clock_off: None,
             credentials: false,
             launch_every: 0.0,
+            machine_held: false,
         }
     }
 
@@ -123,15 +127,16 @@ pub(crate) struct Fleet {
     pub latest: BTreeMap<String, Value>,
     pub logs: tempfile::TempDir,
     pub medium: Medium,
-    /// The machine, until everything above is gone ([`super::machine`]).
-    _heavy: super::machine::Heavy,
+    /// The machine, until everything above is gone ([`super::machine`]),
+    /// unless the test holds it ([`Setup::machine_held`]).
+    _heavy: Option<super::machine::Heavy>,
 }
 
 impl Fleet {
     /// The medium (hosts 0 … n, and n + 1 with a second observer) and the
     /// observers, ready; no vessel yet ([`Fleet::launch`]).
     pub(crate) fn new(setup: Setup, python: &Path) -> Fleet {
-        let heavy = super::machine::heavy();
+        let heavy = (!setup.machine_held).then(super::machine::heavy);
         let n = starts_in(&scenario(setup.mission)).len();
         let hosts = n + setup.observers + usize::from(setup.shore);
         let medium = Medium::new(hosts);
