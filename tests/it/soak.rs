@@ -310,6 +310,8 @@ fn check_files(files: &[PathBuf]) -> (Vec<String>, f64) {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_day_at_sea_coordinator() {
     let test = "soak::a_day_at_sea_coordinator";
+    // Both cores, as the heavy tests take them (CI runs it after them).
+    let _machine = crate::common::machine::heavy_async().await;
     let dir = tempfile::tempdir().unwrap();
     let records = dir.path().join("recordings");
     let day = run_day(dir.path(), &records).await;
@@ -445,15 +447,23 @@ const PEER_REFERENCE: f64 = 1.25 * HOUR;
 /// kept up, from outside: the independent observer (tests/python/
 /// observer.py, in a second host) counts each vessel's beacons over the
 /// last seconds, which must come at 5 per second of mission time.
+///
+/// It takes half of the machine (as a peer fleet of eight at a time warp
+/// of 10: [`crate::common::machine`]), so it runs beside at most a test of
+/// the SITL boats, not beside another fleet or the coordinator's soak.
 #[test]
 fn peer_fleet_memory_is_flat() {
     use crate::common::fleet::skip;
+    use crate::common::machine::{Part, part};
     use crate::common::netns::Medium;
     use crate::common::paper::{BEACON_HZ, N, PAPER};
     use crate::common::peer::Observer;
     let test = "soak::peer_fleet_memory_is_flat";
     let Some(python) = skip(test) else { return };
-    let quiet = wait_quiet(Duration::from_secs(30));
+    let _half = part(Part::Half);
+    // A few seconds for what held the part before to wind down: beside a
+    // test of the SITL boats, the machine may never be quiet.
+    let quiet = wait_quiet(Duration::from_secs(5));
     let medium = Medium::new(2);
     let fleet = format!("soak{}", std::process::id());
     let log = tempfile::NamedTempFile::new().unwrap();

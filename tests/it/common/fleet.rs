@@ -50,8 +50,12 @@ pub(crate) struct Setup {
     /// Wall time between two vessels' starts [s] (0: all at once).
     pub launch_every: f64,
     /// The test holds the machine ([`super::machine::heavy`]) for this
-    /// fleet and another that runs beside it; the fleet does not take it.
+    /// fleet and another that runs beside it, or the part it measured
+    /// ([`Setup::part`]); the fleet takes neither.
     pub machine_held: bool,
+    /// The part of the machine a fleet of this size takes: half for the
+    /// eight vessels of the paper at a time warp of 10 (measured).
+    pub part: super::machine::Part,
 }
 
 impl Setup {
@@ -69,6 +73,7 @@ impl Setup {
             credentials: false,
             launch_every: 0.0,
             machine_held: false,
+            part: super::machine::Part::Half,
         }
     }
 
@@ -127,8 +132,9 @@ pub(crate) struct Fleet {
     pub latest: BTreeMap<String, Value>,
     pub logs: tempfile::TempDir,
     pub medium: Medium,
-    /// The machine, until everything above is gone ([`super::machine`]),
-    /// unless the test holds it ([`Setup::machine_held`]).
+    /// Its part of the machine, until everything above is gone
+    /// ([`super::machine`]), unless the test holds the machine
+    /// ([`Setup::machine_held`]).
     _heavy: Option<super::machine::Heavy>,
 }
 
@@ -136,7 +142,7 @@ impl Fleet {
     /// The medium (hosts 0 … n, and n + 1 with a second observer) and the
     /// observers, ready; no vessel yet ([`Fleet::launch`]).
     pub(crate) fn new(setup: Setup, python: &Path) -> Fleet {
-        let heavy = (!setup.machine_held).then(super::machine::heavy);
+        let heavy = (!setup.machine_held).then(|| super::machine::part(setup.part));
         let n = starts_in(&scenario(setup.mission)).len();
         let hosts = n + setup.observers + usize::from(setup.shore);
         let medium = Medium::new(hosts);

@@ -29,9 +29,9 @@ use mavlink::{AsyncMavConnection, MavHeader};
 pub(crate) const SPEEDUP: u32 = 4;
 /// The mission's origin: ArduPilot's test field at Canberra.
 pub(crate) const ORIGIN: (f64, f64) = (-35.363261, 149.165230);
-/// One SITL fleet at a time (their ports are fixed), and nothing else
-/// heavy beside it: the machine's lock ([`super::machine`]).
-pub(crate) use super::machine::heavy_async as one_sitl_fleet;
+/// One SITL fleet at a time (their ports are fixed), beside at most a
+/// peer fleet of eight: a quarter of the machine ([`super::machine`]).
+pub(crate) use super::machine::quarter_async as one_sitl_fleet;
 
 pub(crate) struct Ardupilot {
     pub binary: PathBuf,
