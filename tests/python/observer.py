@@ -44,12 +44,14 @@ timeout (a peer that went silent) never delays the other.
 ``recv`` is the observer's UTC clock in seconds. ``ready`` is printed on
 stdout (flushed) once the session is open and every subscriber declared.
 The observer runs for ``--duration S`` seconds, or until SIGTERM or SIGINT;
-either way it closes the session and the file cleanly and exits 0.
+either way it closes the file cleanly, then the session (waiting at most
+``CLOSE_WAIT`` for it), and exits 0.
 """
 
 import argparse
 import json
 import math
+import os
 import signal
 import sys
 import threading
@@ -311,14 +313,31 @@ def main(argv):
         for s in subscribers:
             s.undeclare()
         out.close()
-        try:
-            session.close()
-        except zenoh.ZError as e:
-            # Closing waits on every link (a hundred in peer_scale): under
-            # a load of thirty on two cores it once timed out. What was
-            # heard is written by now; the fleet is what the tests judge.
-            print(f"observer: closing the Zenoh session: {e}", file=sys.stderr)
+        # Closing waits on every link: under the load of a hundred vessel
+        # processes on two cores it timed out (Zenoh's 10 s), and the
+        # observer, the test's tool, then took over the 15 s the tests give
+        # it to exit. What was heard is written by now; the fleet is what
+        # the tests judge. So the close gets CLOSE_WAIT, then the process
+        # exits without it (its links end with it).
+        closer = threading.Thread(target=close_session, args=(session,), daemon=True)
+        closer.start()
+        closer.join(timeout=CLOSE_WAIT)
+        if closer.is_alive():
+            print(f"observer: the Zenoh session did not close within {CLOSE_WAIT} s; "
+                  "exiting without it", file=sys.stderr, flush=True)
+            os._exit(0)
     return 0
+
+
+# Seconds the observer waits for its Zenoh session to close on exit.
+CLOSE_WAIT = 5.0
+
+
+def close_session(session):
+    try:
+        session.close()
+    except zenoh.ZError as e:
+        print(f"observer: closing the Zenoh session: {e}", file=sys.stderr, flush=True)
 
 
 if __name__ == "__main__":
