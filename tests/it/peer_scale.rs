@@ -216,8 +216,7 @@ fn fleet_of(n: usize, dir: &Path, python: &Path, checks: &mut Checks, held: bool
     let base = scenario(path);
     let mut setup = Setup::new(&format!("s{n}"), WARP);
     setup.mission = path;
-    setup.machine_held = held;
-    setup.part = machine::Part::Quarter;
+    setup.part = (!held).then_some(machine::Part::Quarter);
     // Boats switched on one after another, not a hundred processes
     // starting Zenoh in the same second on two cores.
     setup.launch_every = LAUNCH_EVERY;

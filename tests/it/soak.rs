@@ -449,8 +449,9 @@ const PEER_REFERENCE: f64 = 1.25 * HOUR;
 /// last seconds, which must come at 5 per second of mission time.
 ///
 /// It takes half of the machine (as a peer fleet of eight at a time warp
-/// of 10: [`crate::common::machine`]), so it runs beside at most a test of
-/// the SITL boats, not beside another fleet or the coordinator's soak.
+/// of 10: [`crate::common::machine`]), so it runs beside at most a
+/// quarter's test (SITL boats, the fleet of 30, the Docker demo), not
+/// beside another fleet of eight or the coordinator's soak.
 #[test]
 fn peer_fleet_memory_is_flat() {
     use crate::common::fleet::skip;

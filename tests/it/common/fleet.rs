@@ -49,13 +49,11 @@ pub(crate) struct Setup {
     pub credentials: bool,
     /// Wall time between two vessels' starts [s] (0: all at once).
     pub launch_every: f64,
-    /// The test holds the machine ([`super::machine::heavy`]) for this
-    /// fleet and another that runs beside it, or the part it measured
-    /// ([`Setup::part`]); the fleet takes neither.
-    pub machine_held: bool,
-    /// The part of the machine a fleet of this size takes: half for the
-    /// eight vessels of the paper at a time warp of 10 (measured).
-    pub part: super::machine::Part,
+    /// The part of the machine the fleet holds while it runs: half for
+    /// the paper's eight vessels at a time warp of 10 (measured); `None`
+    /// where the test holds the whole machine ([`super::machine::heavy`])
+    /// for this fleet and another that runs beside it.
+    pub part: Option<super::machine::Part>,
 }
 
 impl Setup {
@@ -72,8 +70,7 @@ impl Setup {
             clock_off: None,
             credentials: false,
             launch_every: 0.0,
-            machine_held: false,
-            part: super::machine::Part::Half,
+            part: Some(super::machine::Part::Half),
         }
     }
 
@@ -133,8 +130,7 @@ pub(crate) struct Fleet {
     pub logs: tempfile::TempDir,
     pub medium: Medium,
     /// Its part of the machine, until everything above is gone
-    /// ([`super::machine`]), unless the test holds the machine
-    /// ([`Setup::machine_held`]).
+    /// ([`Setup::part`]).
     _heavy: Option<super::machine::Heavy>,
 }
 
@@ -142,7 +138,7 @@ impl Fleet {
     /// The medium (hosts 0 … n, and n + 1 with a second observer) and the
     /// observers, ready; no vessel yet ([`Fleet::launch`]).
     pub(crate) fn new(setup: Setup, python: &Path) -> Fleet {
-        let heavy = (!setup.machine_held).then(|| super::machine::part(setup.part));
+        let heavy = setup.part.map(super::machine::part);
         let n = starts_in(&scenario(setup.mission)).len();
         let hosts = n + setup.observers + usize::from(setup.shore);
         let medium = Medium::new(hosts);

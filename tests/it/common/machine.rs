@@ -24,7 +24,8 @@
 //!
 //! A hold is a lock on a file per part, not a mutex: it holds across
 //! processes, so that scripts/test can run the quarters' tests, the
-//! halves' and all others in three processes of this test binary. The
+//! halves' and the light ones in three processes of this test binary at
+//! once (and the Docker demo as a quarter, `flock` on its file). The
 //! whole machine locks the half, then the quarter (always in that order,
 //! and a part's holder never waits for another: no deadlock).
 
