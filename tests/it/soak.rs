@@ -8,7 +8,7 @@
 //!   (`src/load/link.rs`: the agent's handshake, a kinematic hull, poses at
 //!   a wall rate). `seacover agent` simulates every hull at 1 kHz of
 //!   mission time and sends poses at 20 Hz of it: at the warp a day needs
-//!   to fit in minutes (400) that is 2 cores of simulation and 64 000
+//!   to fit in two minutes (800) that is 4 cores of simulation and 128 000
 //!   poses a second, on a two-core machine; the coordinator cannot tell a
 //!   link's hull from a simulated one, and what grows with time in it
 //!   (ticks, commands, poses received and recorded, chunks, files) is all
@@ -44,11 +44,13 @@ const BIN: &str = env!("CARGO_BIN_EXE_seacover");
 const HOUR: f64 = 3600.0;
 /// The mission time of the coordinator's soak [s].
 const DAY: f64 = 24.0 * HOUR;
-/// Mission seconds per wall second: a day in 3.6 minutes.
-const WARP: f64 = 400.0;
+/// Mission seconds per wall second: a day in 108 s. At 400 it took 216 s
+/// of CI; at 800 the machine was 1.1 cores busy, 0.03 % of ticks were
+/// skipped and memory rose 5–6 % (docs/performance.md, "A day at sea").
+const WARP: f64 = 800.0;
 /// The soak mission's tick rate [Hz].
 const TICK_HZ: f64 = 2.0;
-/// Poses per wall second per link: one every 0.8 s of mission time, within
+/// Poses per wall second per link: one every 1.6 s of mission time, within
 /// the 3 s liveness.
 const POSE_HZ: f64 = 500.0;
 /// `--record-keep`: six hours of mission time (the byte limit is checked
