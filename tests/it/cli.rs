@@ -299,8 +299,9 @@ fn refused(args: &[&str]) -> (Option<i32>, String) {
     )
 }
 
-/// A peer's `--actuator` is checked as a scenario's vessel is, before
-/// anything joins a fleet; and the flags only a peer takes are refused
+/// A peer's `--actuator` is checked as a scenario's vessel is, and its
+/// `--beacon-hz` within [1, 20], before anything joins a fleet; and the
+/// flags only a peer takes are refused
 /// beside `--server` rather than ignored (they were: `--mission`,
 /// `--alone`, `--learn`).
 #[test]
@@ -315,12 +316,18 @@ fn peer_flags_are_checked_and_refused_without_peer() {
         assert_eq!(code, Some(2), "{value}: {err}");
         assert!(err.contains(says), "--actuator {value}: {err}");
     }
+    for value in ["0.5", "21", "0", "-3", "NaN", "inf", "x"] {
+        let (code, err) = refused(&["agent", "--peer", &format!("--beacon-hz={value}")]);
+        assert_eq!(code, Some(2), "{value}: {err}");
+        assert!(err.contains("--beacon-hz"), "--beacon-hz {value}: {err}");
+    }
     let mission = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/paper.json");
     for flags in [
         &["--actuator", "0.5,0.004"][..],
         &["--mission", mission],
         &["--alone"],
         &["--learn"],
+        &["--beacon-hz", "3"],
     ] {
         let args = [&["agent", "--server", "http://127.0.0.1:1"][..], flags].concat();
         let (code, err) = refused(&args);

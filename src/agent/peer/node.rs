@@ -715,15 +715,20 @@ async fn run_vessel(
                 if let Some((value, sd)) = sensor.as_mut().and_then(|s| s.read(t, crate::geometry::Point { x, y })) {
                     v.measured(&shared, x, y, value, sd).await;
                 }
+                // Each schedule keeps its own phase: counted from the
+                // step that fired it, a rate that does not divide the
+                // hull's 20 Hz would be rounded down to one that does (3
+                // Hz beaconed at 2.86). A faster one (a mission may tick
+                // at 100 Hz) fires at every step, without a backlog.
                 if t + 1e-9 >= next_control {
                     let hz = v.current.as_ref().map_or(10.0, |r| r.mission.tick_hz());
-                    next_control = t + 1.0 / hz;
+                    next_control = (next_control + 1.0 / hz).max(t);
                     if let Some(command) = v.step(&shared, &onboard.state, t) {
                         onboard.command = Some((command, t));
                     }
                 }
                 if t + 1e-9 >= next_beacon {
-                    next_beacon = t + beacon_every;
+                    next_beacon = (next_beacon + beacon_every).max(t);
                     let controlled = v.current.is_some();
                     let state = onboard.state;
                     v.beacon(&shared, &state, controlled).await;

@@ -49,6 +49,9 @@ pub(crate) struct Setup {
     pub credentials: bool,
     /// Wall time between two vessels' starts [s] (0: all at once).
     pub launch_every: f64,
+    /// The vessels' beacons per second of mission time (`--beacon-hz`
+    /// where it is not the default).
+    pub beacon_hz: f64,
     /// The part of the machine the fleet holds while it runs: half for
     /// the paper's eight vessels at a time warp of 10 (measured); `None`
     /// where the test holds the whole machine ([`super::machine::heavy`])
@@ -70,6 +73,7 @@ impl Setup {
             clock_off: None,
             credentials: false,
             launch_every: 0.0,
+            beacon_hz: BEACON_HZ,
             part: Some(super::machine::Part::Half),
         }
     }
@@ -102,6 +106,8 @@ pub(crate) struct Fleet {
     /// 1 … n.
     pub n: usize,
     pub warp: f64,
+    /// Beacons per second of mission time.
+    pub beacon_hz: f64,
     /// UTC when the vessels were started.
     pub started: f64,
     pub vessel_args: Vec<String>,
@@ -152,6 +158,7 @@ impl Fleet {
             name,
             n,
             warp: setup.warp,
+            beacon_hz: setup.beacon_hz,
             started: 0.0,
             vessel_args: setup.vessel_args,
             mission_file: setup.mission_file,
@@ -214,6 +221,11 @@ impl Fleet {
                     vec![]
                 })
                 .args(["--time-warp", &self.warp.to_string()])
+                .args(if self.beacon_hz == BEACON_HZ {
+                    vec![]
+                } else {
+                    vec!["--beacon-hz".to_string(), self.beacon_hz.to_string()]
+                })
                 .args(&self.vessel_args)
                 .args(
                     self.credentials
@@ -274,7 +286,7 @@ impl Fleet {
                                 l["beacon"]["t"].as_f64().unwrap_or(t),
                                 seq,
                                 t,
-                                self.warp,
+                                self.warp * self.beacon_hz,
                             ),
                             None => seq,
                         };
@@ -313,7 +325,7 @@ impl Fleet {
                 self.latest
                     .get(id)
                     .and_then(|r| r["n"].as_f64())
-                    .map_or(0.0, |n| n / BEACON_HZ)
+                    .map_or(0.0, |n| n / self.beacon_hz)
             })
             .fold(f64::INFINITY, f64::min)
     }
@@ -685,11 +697,11 @@ impl Fleet {
 /// The number (since its start) of a vessel's beacon `seq` sent at `t`
 /// (sender UTC), from another of its beacons, number `n0`, `seq0` at `t0`:
 /// `seq` counts modulo [`SEQ_MODULUS`], so the difference is taken modulo
-/// that, plus the multiple of it nearest to what the clocks say (5 beacons
-/// per second of mission time, `warp` mission seconds per second): right
-/// across any gap while the vessel keeps its pace.
-pub(crate) fn unwrap_seq(n0: i64, seq0: i64, t0: f64, seq: i64, t: f64, warp: f64) -> i64 {
-    let expected = (t - t0) * warp * BEACON_HZ;
+/// that, plus the multiple of it nearest to what the clocks say (`rate`
+/// beacons per second of the sender's clock: the beacon rate times the
+/// time warp): right across any gap while the vessel keeps its pace.
+pub(crate) fn unwrap_seq(n0: i64, seq0: i64, t0: f64, seq: i64, t: f64, rate: f64) -> i64 {
+    let expected = (t - t0) * rate;
     let d = (seq - seq0).rem_euclid(SEQ_MODULUS);
     let k = ((expected - d as f64) / SEQ_MODULUS as f64).round() as i64;
     n0 + d + k * SEQ_MODULUS

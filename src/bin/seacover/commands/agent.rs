@@ -46,6 +46,12 @@ pub(crate) struct Args {
     /// the mission's actuator.
     #[arg(long, value_name = "K,BETA", requires = "peer", conflicts_with = "server", value_parser = parse_actuator)]
     actuator: Option<seacover::protocol::ActuatorDocument>,
+    /// With --peer: beacons per second of mission time, in [1, 20]; 5
+    /// unless told. Fewer fit a narrower radio or encrypted links into
+    /// their budget (docs/peer.md, "Radio budgets"); a neighbour is stale
+    /// after 3 s without one.
+    #[arg(long, value_name = "HZ", requires = "peer", conflicts_with = "server", value_parser = parse_beacon_hz)]
+    beacon_hz: Option<f64>,
     #[command(flatten)]
     zenoh: crate::shell::ZenohArgs,
     #[command(flatten)]
@@ -148,13 +154,28 @@ fn parse_sample_sd(s: &str) -> Result<f64, String> {
     }
 }
 
-fn parse_station_radius(s: &str) -> Result<f64, String> {
-    let r: f64 = s.trim().parse().map_err(|e| format!("{e}"))?;
-    if (0.0..=20.0).contains(&r) {
-        Ok(r)
+/// A number within `range` (which refuses NaN), or what it should be.
+fn parse_within(s: &str, range: std::ops::RangeInclusive<f64>, what: &str) -> Result<f64, String> {
+    let v: f64 = s.trim().parse().map_err(|e| format!("{e}"))?;
+    if range.contains(&v) {
+        Ok(v)
     } else {
-        Err("expected a number of metres in [0, 20]".into())
+        Err(format!(
+            "expected {what} in [{}, {}]",
+            range.start(),
+            range.end()
+        ))
     }
+}
+
+fn parse_beacon_hz(s: &str) -> Result<f64, String> {
+    // At least three beacons in the 3 s after which a neighbour is stale,
+    // so that two lost in a row do not drop it.
+    parse_within(s, 1.0..=20.0, "beacons per second")
+}
+
+fn parse_station_radius(s: &str) -> Result<f64, String> {
+    parse_within(s, 0.0..=20.0, "a number of metres")
 }
 
 pub(crate) async fn run(args: Args) -> anyhow::Result<()> {
@@ -189,7 +210,7 @@ async fn peer(args: Args) -> anyhow::Result<()> {
     let mut vessels = seacover::agent::peer_fleet(
         scenario.as_deref(),
         args.vessels,
-        args.id,
+        args.id.clone(),
         args.preset.params(),
         args.seed,
     )?;
@@ -204,19 +225,29 @@ async fn peer(args: Args) -> anyhow::Result<()> {
         vessels[0].start.y = y;
         vessels[0].start.psi = psi;
     }
-    let mut config = seacover::agent::peer::PeerConfig::new(args.fleet.name, args.zenoh.options())?;
+    let mut config = member_config(&args)?;
     config.time_warp = args.time_warp.factor;
-    config.alone = args.alone;
     config.seed = args.seed;
-    args.learn.apply(&mut config)?;
     // Beacons are aged in mission seconds.
     config.ageing.warp = args.time_warp.factor;
+    seacover::agent::peer::node::run(config, vessels, shell::stop_on_signal()).await?;
+    Ok(())
+}
+
+/// A fleet member's settings, simulated hulls or bridged boats alike.
+fn member_config(args: &Args) -> anyhow::Result<seacover::agent::peer::PeerConfig> {
+    let mut config =
+        seacover::agent::peer::PeerConfig::new(args.fleet.name.clone(), args.zenoh.options())?;
+    config.alone = args.alone;
+    args.learn.apply(&mut config)?;
     if let Some(path) = &args.mission {
         config.load_mission(path)?;
     }
     config.actuators.given = args.actuator;
-    seacover::agent::peer::node::run(config, vessels, shell::stop_on_signal()).await?;
-    Ok(())
+    if let Some(hz) = args.beacon_hz {
+        config.beacon_hz = hz;
+    }
+    Ok(config)
 }
 
 async fn bridge(args: Args) -> anyhow::Result<()> {
@@ -238,17 +269,14 @@ async fn bridge(args: Args) -> anyhow::Result<()> {
         {
             return Err(seacover::agent::peer::PeerError::Id(id.clone()).into());
         }
-        let mut config =
-            seacover::agent::peer::PeerConfig::new(args.fleet.name.clone(), args.zenoh.options())?;
-        config.alone = args.alone;
-        args.learn.apply(&mut config)?;
-        if let Some(path) = &args.mission {
-            config.load_mission(path)?;
-        }
-        config.actuators.given = args.actuator;
         Some(
-            seacover::agent::peer::node::Member::join(config, args.id.clone(), &tasks, &stop)
-                .await?,
+            seacover::agent::peer::node::Member::join(
+                member_config(&args)?,
+                args.id.clone(),
+                &tasks,
+                &stop,
+            )
+            .await?,
         )
     } else {
         None
