@@ -22,13 +22,16 @@
 //! as many); no vessel hears more vessels than are within range; and the
 //! nodes with 20–30 vessels within range use, at 100 vessels, no more than
 //! a quarter more CPU, memory and bytes than those at 30 (a node's cost
-//! follows its neighbourhood, not the fleet).
-//! The fleet of 30 runs with a quarter of the machine (25 %, measured),
-//! beside at most a peer fleet of eight at a time warp of 10 ([`machine`]);
-//! the fleet of 8 beside the fleet of 100, on a medium of its own (a
-//! twentieth of a core at the warp), under the whole machine: the hundred
-//! keep both cores busy (97 %, measured), so what is compared between 30
-//! and 100 vessels is not made lighter at 100.
+//! follows its neighbourhood, not the fleet). CPU time is the one the
+//! machine's state moves (the same 30 took 2.3 to 3.6 % a node on
+//! different days), so it is compared relative to a fleet of 8 run beside
+//! each, on a medium of its own: a yardstick under the same load.
+//! The fleet of 30 and its 8 run with a quarter of the machine (25 %,
+//! measured), beside at most a peer fleet of eight at a time warp of 10
+//! ([`machine`]); the 100 and its 8 (a twentieth of a core at the warp)
+//! under the whole machine: the hundred keep both cores busy (97 %,
+//! measured), so what is compared between 30 and 100 vessels is not made
+//! lighter at 100.
 //! `SEACOVER_SCALE=N` runs the fleet of N alone.
 
 use std::path::Path;
@@ -103,9 +106,9 @@ fn a_hundred_vessels_converge_and_a_node_costs_what_its_neighbourhood_does() {
             vec![fleet_of(n, dir.path(), &python, &mut checks, n > 30)]
         }
         Err(_) => {
-            let thirty = fleet_of(30, dir.path(), &python, &mut checks, false);
-            let (eight, hundred) = side_by_side(dir.path(), &python, &mut checks);
-            vec![eight, thirty, hundred]
+            let (beside30, thirty) = side_by_side(30, dir.path(), &python, &mut checks);
+            let (eight, hundred) = side_by_side(100, dir.path(), &python, &mut checks);
+            vec![eight, thirty, hundred, beside30]
         }
     };
     let median = |v: &[f64]| -> f64 {
@@ -150,12 +153,13 @@ fn a_hundred_vessels_converge_and_a_node_costs_what_its_neighbourhood_does() {
         .collect();
     eprintln!(
         "SUMMARY {test}: R = {RANGE} m, {DENSITY} vessels per km², time warp {WARP}, medians \
-         per node (and the most of any), CPU and bytes per second of mission time:\n  {}\n  \
+         per node (and the most of any), CPU and bytes per second of mission time; the eight \
+         beside the hundred, the 30, the hundred, the eight beside the 30:\n  {}\n  \
          {:.0} s wall",
         table.join("\n  "),
         wall.elapsed().as_secs_f64()
     );
-    let [_, at30, at100] = &rows[..] else {
+    let [eight, at30, at100, beside30] = &rows[..] else {
         return checks.finish();
     };
     // Nodes with the same neighbourhood in both fleets: what the fleet's
@@ -166,8 +170,24 @@ fn a_hundred_vessels_converge_and_a_node_costs_what_its_neighbourhood_does() {
             .map(|i| of[i])
             .collect()
     };
+    // CPU time is the one figure the machine's state moves: the same fleet
+    // of 30 took 2.3 to 3.6 % a node on different days, and in one CI run
+    // these nodes took 2.57 % at 30 and 3.24 at 100 (1.26 times) while the
+    // eight beside the hundred took 1.23 % (1.08 in a run here the same
+    // day): the machine, not the fleet, was slower then. So each fleet's
+    // CPU is taken relative to the fleet of eight run beside it at the
+    // same time on a medium of its own (7 neighbours each, the same in
+    // both): what the fleet's size adds, not the machine's state.
+    let relative = |row: &Row, yardstick: &Row| -> Vec<f64> {
+        let y = median(&yardstick.cpu);
+        band(row, &row.cpu).iter().map(|c| c / y).collect()
+    };
     for (what, a, b) in [
-        ("CPU", band(at30, &at30.cpu), band(at100, &at100.cpu)),
+        (
+            "CPU (relative to the eight beside)",
+            relative(at30, beside30),
+            relative(at100, eight),
+        ),
         ("memory", band(at30, &at30.rss), band(at100, &at100.rss)),
         ("sent bytes", band(at30, &at30.tx), band(at100, &at100.tx)),
         (
@@ -190,9 +210,15 @@ fn a_hundred_vessels_converge_and_a_node_costs_what_its_neighbourhood_does() {
     checks.finish();
 }
 
-/// The fleets of 8 and 100 at once, under one hold of the machine.
-fn side_by_side(dir: &Path, python: &Path, checks: &mut Checks) -> (Row, Row) {
-    let _machine = machine::heavy();
+/// The fleet of `n` and one of 8 beside it, on a medium of its own: 30
+/// with a quarter of the machine, 100 with the whole (the hundred keep
+/// both cores busy).
+fn side_by_side(n: usize, dir: &Path, python: &Path, checks: &mut Checks) -> (Row, Row) {
+    let _machine = if n > 30 {
+        machine::heavy()
+    } else {
+        machine::part(machine::Part::Quarter)
+    };
     let test = checks.test.clone();
     std::thread::scope(|s| {
         let eight = s.spawn(move || {
@@ -200,12 +226,12 @@ fn side_by_side(dir: &Path, python: &Path, checks: &mut Checks) -> (Row, Row) {
             let row = fleet_of(8, dir, python, &mut own, true);
             (row, own.failed)
         });
-        let hundred = fleet_of(100, dir, python, checks, true);
+        let big = fleet_of(n, dir, python, checks, true);
         let (eight, failed) = eight
             .join()
             .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
         checks.failed.extend(failed);
-        (eight, hundred)
+        (eight, big)
     })
 }
 
