@@ -101,9 +101,8 @@ fn a_hundred_vessels_converge_and_a_node_costs_what_its_neighbourhood_does() {
     let rows = match std::env::var("SEACOVER_SCALE") {
         Ok(n) => {
             let n = n.parse().expect("SEACOVER_SCALE: a number of vessels");
-            // A quarter of the machine is what 30 measured to need.
-            let _machine = (n > 30).then(machine::heavy);
-            vec![fleet_of(n, dir.path(), &python, &mut checks, n > 30)]
+            let _machine = hold(n);
+            vec![fleet_of(n, dir.path(), &python, &mut checks)]
         }
         Err(_) => {
             let (beside30, thirty) = side_by_side(30, dir.path(), &python, &mut checks);
@@ -210,23 +209,29 @@ fn a_hundred_vessels_converge_and_a_node_costs_what_its_neighbourhood_does() {
     checks.finish();
 }
 
-/// The fleet of `n` and one of 8 beside it, on a medium of its own: 30
-/// with a quarter of the machine, 100 with the whole (the hundred keep
-/// both cores busy).
-fn side_by_side(n: usize, dir: &Path, python: &Path, checks: &mut Checks) -> (Row, Row) {
-    let _machine = if n > 30 {
+/// The machine's hold for a fleet of `n` (and the 8 beside it): a
+/// quarter up to 30 (what 30 measured to need), else the whole (the
+/// hundred keep both cores busy).
+fn hold(n: usize) -> machine::Heavy {
+    if n > 30 {
         machine::heavy()
     } else {
         machine::part(machine::Part::Quarter)
-    };
+    }
+}
+
+/// The fleet of `n` and one of 8 beside it, on a medium of its own, under
+/// one hold of the machine.
+fn side_by_side(n: usize, dir: &Path, python: &Path, checks: &mut Checks) -> (Row, Row) {
+    let _machine = hold(n);
     let test = checks.test.clone();
     std::thread::scope(|s| {
         let eight = s.spawn(move || {
             let mut own = Checks::new(&test);
-            let row = fleet_of(8, dir, python, &mut own, true);
+            let row = fleet_of(8, dir, python, &mut own);
             (row, own.failed)
         });
-        let big = fleet_of(n, dir, python, checks, true);
+        let big = fleet_of(n, dir, python, checks);
         let (eight, failed) = eight
             .join()
             .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
@@ -235,14 +240,14 @@ fn side_by_side(n: usize, dir: &Path, python: &Path, checks: &mut Checks) -> (Ro
     })
 }
 
-/// Runs a fleet of `n` and judges it: with a quarter of the machine, or,
-/// `held`, under the machine's hold that the caller took.
-fn fleet_of(n: usize, dir: &Path, python: &Path, checks: &mut Checks, held: bool) -> Row {
+/// Runs a fleet of `n` and judges it, under the machine's hold that the
+/// caller took ([`hold`]).
+fn fleet_of(n: usize, dir: &Path, python: &Path, checks: &mut Checks) -> Row {
     let (path, side) = write_mission(n, dir);
     let base = scenario(path);
     let mut setup = Setup::new(&format!("s{n}"), WARP);
     setup.mission = path;
-    setup.part = (!held).then_some(machine::Part::Quarter);
+    setup.part = None;
     // Boats switched on one after another, not a hundred processes
     // starting Zenoh in the same second on two cores.
     setup.launch_every = LAUNCH_EVERY;
